@@ -1,0 +1,23 @@
+// The adamesh subcommands. Each lives in its own cmd_<name>.cpp and returns the exit code;
+// errors are thrown as adamesh::Error and turned into one line on stderr by main().
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace adamesh::cli {
+
+using Argv = std::vector<std::string>;
+
+struct Command {
+  const char* name;
+  const char* summary;
+  int (*run)(const Argv& args);
+};
+
+int cmd_version(const Argv& args);
+
+/// All registered commands (main.cpp).
+const std::vector<Command>& commands();
+
+}  // namespace adamesh::cli

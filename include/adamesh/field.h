@@ -1,0 +1,59 @@
+// Scalar fields and the queries every pipeline stage uses: value, gradient, signed-distance
+// estimate and projection onto the iso-surface.
+//
+// Sign convention: the *inside* of the object is where inside_sign·(f − iso) ≥ 0 (see input.h:
+// +1 for volumes, where bright = inside; −1 for implicit inputs, where f < 0 = inside).
+#pragma once
+
+#include <memory>
+
+#include "adamesh/vec.h"
+#include "adamesh/volume.h"
+
+namespace adamesh {
+
+class ScalarField {
+ public:
+  virtual ~ScalarField() = default;
+  /// f(p) at a world point. Points outside domain() are clamped onto it for sampled fields.
+  virtual double value(const Vec3& p) const = 0;
+  /// ∇f(p) in world units (per world unit of length).
+  virtual Vec3 gradient(const Vec3& p) const = 0;
+  /// True when value() and gradient() are exact (analytic shapes, user expressions).
+  virtual bool is_analytic() const noexcept { return false; }
+  /// The box the field is defined or sampled on (world coordinates).
+  virtual Box domain() const = 0;
+};
+
+/// Trilinear interpolation of a sampled volume; gradient = trilinear interpolation of central
+/// differences at the grid points (one-sided at the border), mapped to world units.
+/// Keeps a reference to the volume: the volume must outlive the field.
+std::unique_ptr<ScalarField> make_volume_field(const Volume& volume);
+
+/// (f(p) − iso) / |∇f(p)|: signed distance estimate, exact for distance fields. Returns 0 when
+/// f(p) == iso and ±infinity-free large values are capped at `cap` when the gradient vanishes.
+double signed_distance(const ScalarField& f, double iso, const Vec3& p, double cap = 1e30);
+
+struct ProjectOptions {
+  int max_steps = 5;           ///< Newton steps
+  double tolerance = 1e-3;     ///< stop when |T_S| < tolerance (world units)
+  double max_step = 0.5;       ///< cap on each step's length (world units)
+  /// Optional plane constraint: steps are projected into the plane through the start point with
+  /// this normal (border vertices stay on their volume face). Zero vector = unconstrained.
+  Vec3 plane_normal{};
+};
+
+struct ProjectResult {
+  Vec3 point;
+  double residual = 0;  ///< |signed_distance| at the returned point
+  int steps = 0;
+  bool converged = false;
+};
+
+/// Newton projection p ← p − (f(p) − iso) ∇f/|∇f|² with safeguards: step length capped, flat
+/// gradients (|∇f| tiny) stop the iteration, a sign change along a step is resolved by bisection
+/// along the step, and the result never has a larger residual than the start point.
+ProjectResult project_to_iso(const ScalarField& f, double iso, const Vec3& p,
+                             const ProjectOptions& opt = {});
+
+}  // namespace adamesh

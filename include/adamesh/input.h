@@ -1,0 +1,50 @@
+// Inputs named on the command line: a volume file, `shape:NAME` or `expr:'...'`.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "adamesh/field.h"
+#include "adamesh/volume.h"
+
+namespace adamesh {
+
+/// Options for headerless raw files (`--dims X,Y,Z --type T [--spacing] [--origin] [--endian]`).
+struct RawOptions {
+  std::optional<std::array<std::int64_t, 3>> dims;
+  std::optional<ScalarType> type;
+  Vec3 spacing{1, 1, 1};
+  Vec3 origin{};
+  bool big_endian = false;
+  std::uint64_t header_bytes = 0;  ///< bytes to skip at the start of the file
+};
+
+struct InputOptions {
+  RawOptions raw;
+  std::optional<Box> bounds;         ///< sampling box of implicit inputs (default per shape)
+  int resolution = 0;                ///< samples along the longest side of the box; 0 = default (64)
+  std::optional<double> nan_value;   ///< replace NaN/Inf samples by this value instead of failing
+  bool flip_inside = false;          ///< swap inside and outside
+};
+
+struct Input {
+  std::string spec;                          ///< as given on the command line
+  Volume volume;                             ///< sampled values (implicit inputs: float32 grid)
+  std::shared_ptr<const ScalarField> field;  ///< exact field: analytic, or trilinear on `volume`
+  double inside_sign = +1;                   ///< +1: inside where f ≥ iso; −1: where f ≤ iso
+  std::optional<double> default_iso;         ///< shapes: 0; files: none
+  std::int64_t nonfinite_samples = 0;        ///< NaN/Inf samples found (replaced if nan_value)
+};
+
+/// Loads a file (format from its extension/magic), or samples `shape:NAME` / `expr:EXPR`.
+/// Throws Error with a one-line message naming the input and the problem.
+Input load_input(const std::string& spec, const InputOptions& options = {});
+
+/// Names of the built-in shapes (`shape:NAME`).
+std::vector<std::string> shape_names();
+
+}  // namespace adamesh

@@ -1,0 +1,36 @@
+// File input and output: volumes (NRRD, MetaImage, NIfTI-1/2, VTK legacy and XML ImageData,
+// VolVis SLC, CCP4/MRC, headerless raw) and triangle meshes (PLY, OBJ, OFF, STL).
+#pragma once
+
+#include <string>
+
+#include "adamesh/input.h"
+#include "adamesh/mesh.h"
+#include "adamesh/volume.h"
+
+namespace adamesh {
+
+/// Reads a volume file; the format is chosen by extension and checked against the file's magic.
+/// Raw files (`.raw` or any file when raw.dims is set) need raw.dims and raw.type.
+/// Throws Error(invalid_input | unsupported, "<path>: <problem>").
+Volume read_volume(const std::string& path, const RawOptions& raw = {});
+
+/// Name of the format read_volume() would use for `path` ("NRRD", "MetaImage", ...).
+std::string volume_format_for(const std::string& path, const RawOptions& raw = {});
+
+enum class MeshFormat { automatic, ply, obj, off, stl };
+
+struct MeshWriteOptions {
+  MeshFormat format = MeshFormat::automatic;  ///< automatic: from the extension
+  bool ascii = false;                         ///< PLY: ASCII instead of binary little-endian
+  bool write_normals = true;                  ///< when the mesh has normals
+  bool write_attributes = true;               ///< PLY: per-vertex attributes as properties
+};
+
+/// Writes atomically (temporary file + rename). Throws Error(output_failed, "<path>: ...").
+void write_mesh(const Mesh& mesh, const std::string& path, const MeshWriteOptions& options = {});
+
+/// Reads PLY (ASCII/binary), OBJ or OFF. Polygons are fan-triangulated.
+Mesh read_mesh(const std::string& path);
+
+}  // namespace adamesh

@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Installs the Debian packages adamesh needs, only those that are missing. Idempotent.
+#   scripts/install-deps.sh          build + test dependencies
+#   scripts/install-deps.sh --bench  also the benchmark peers and plotting tools
+#   scripts/install-deps.sh --full   also VTK and CGAL (opt-in peers of `make bench-full`)
+set -euo pipefail
+
+pkgs=(
+  build-essential cmake ninja-build pkg-config
+  zlib1g-dev            # gzip/zlib encodings in NRRD, MetaImage, NIfTI, VTK XML
+  libpugixml-dev        # VTK XML ImageData (.vti) header
+  libnifti2-dev         # NIfTI-1/NIfTI-2 header definitions and qform/sform conversion
+  libmuparser-dev       # user expressions  expr:'...'
+  libtbb-dev            # oneTBB: parallel stages
+  libboost-graph-dev    # Edmonds maximum-cardinality matching (4-8 blocks)
+  libmeshoptimizer-dev  # benchmark peer: marching cubes + meshopt_simplify
+  nlohmann-json3-dev    # JSON reports (only in .cpp files that write or read JSON)
+  libgtest-dev libgmock-dev libbenchmark-dev
+  python3
+)
+case "${1:-}" in
+  --bench) pkgs+=(gnuplot-nox) ;;
+  --full)  pkgs+=(gnuplot-nox libvtk9-dev libcgal-dev) ;;
+esac
+
+missing=()
+for p in "${pkgs[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+echo "install-deps: installing ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -q
+$SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
