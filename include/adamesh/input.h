@@ -29,6 +29,7 @@ struct InputOptions {
   int resolution = 0;                ///< samples along the longest side of the box; 0 = default (64)
   std::optional<double> nan_value;   ///< replace NaN/Inf samples by this value instead of failing
   bool flip_inside = false;          ///< swap inside and outside
+  bool keep_nonfinite = false;       ///< `info`: count NaN/Inf samples instead of failing
 };
 
 struct Input {
