@@ -67,6 +67,15 @@ struct SurfelComplex {
   std::int64_t find_node(std::uint64_t key) const noexcept;
   /// Number of polygon edges on the volume border (border segments).
   std::size_t num_border_segments() const noexcept;
+  /// Number of face segments: an interior segment is an edge of two surfels, a border one of one.
+  std::size_t num_segments() const noexcept {
+    return (surfel_nodes.size() + num_border_segments()) / 2;
+  }
+  /// Euler characteristic of the complex: nodes − segments + surfels.
+  std::int64_t euler_characteristic() const noexcept {
+    return static_cast<std::int64_t>(num_nodes()) - static_cast<std::int64_t>(num_segments()) +
+           static_cast<std::int64_t>(num_surfels());
+  }
 };
 
 /// Builds the surfel complex of `volume` at `iso`. Parallel over z-slabs without locks.
