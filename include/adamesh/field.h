@@ -6,6 +6,8 @@
 #pragma once
 
 #include <memory>
+#include <optional>
+#include <string>
 
 #include "adamesh/vec.h"
 #include "adamesh/volume.h"
@@ -26,9 +28,23 @@ class ScalarField {
 };
 
 /// Trilinear interpolation of a sampled volume; gradient = trilinear interpolation of central
-/// differences at the grid points (one-sided at the border), mapped to world units.
+/// differences at the grid points (one-sided at the border), mapped to world units with the
+/// inverse transpose of Grid::index_to_world_matrix(). Computed on the fly (no gradient volume).
 /// Keeps a reference to the volume: the volume must outlive the field.
 std::unique_ptr<ScalarField> make_volume_field(const Volume& volume);
+/// Same, sharing ownership of the volume (the field keeps it alive).
+std::shared_ptr<const ScalarField> make_volume_field(std::shared_ptr<const Volume> volume);
+
+/// Built-in analytic shape `name` (see shape_names() in input.h and docs/CONVENTIONS.md): exact
+/// value and gradient, negative inside. domain() = `domain` or the shape's default box.
+/// Throws Error(invalid_input, "shape:NAME: unknown shape (valid: ...)").
+std::shared_ptr<const ScalarField> make_shape_field(const std::string& name,
+                                                    const std::optional<Box>& domain = {});
+
+/// User expression in x, y, z (muparser syntax, plus the constant `pi`); gradient by central
+/// differences with step 1e-6 · domain.diagonal(). value()/gradient() may be called concurrently.
+/// Throws Error(invalid_input, "expr:'EXPR': <parser message>").
+std::shared_ptr<const ScalarField> make_expr_field(const std::string& expr, const Box& domain);
 
 /// (f(p) − iso) / |∇f(p)|: signed distance estimate, exact for distance fields. Returns 0 when
 /// f(p) == iso and ±infinity-free large values are capped at `cap` when the gradient vanishes.

@@ -34,7 +34,9 @@ struct InputOptions {
 
 struct Input {
   std::string spec;                          ///< as given on the command line
-  Volume volume;                             ///< sampled values (implicit inputs: float32 grid)
+  /// Sampled values (implicit inputs: float32 grid). Shared and const so that `field`, which
+  /// reads it, stays valid when the Input is moved or copied.
+  std::shared_ptr<const Volume> volume;
   std::shared_ptr<const ScalarField> field;  ///< exact field: analytic, or trilinear on `volume`
   double inside_sign = +1;                   ///< +1: inside where f ≥ iso; −1: where f ≤ iso
   std::optional<double> default_iso;         ///< shapes: 0; files: none
@@ -42,6 +44,10 @@ struct Input {
 };
 
 /// Loads a file (format from its extension/magic), or samples `shape:NAME` / `expr:EXPR`.
+/// Implicit inputs: box = options.bounds or the shape's default ([-1,1]^3 for expressions),
+/// N = options.resolution (default 64) samples along the longest side, isotropic spacing
+/// longest/(N−1), dims[a] = round(extent[a]/spacing)+1, grid centred in the box; the field's
+/// domain() is the grid's world box. NaN/Inf samples: see docs/CONVENTIONS.md.
 /// Throws Error with a one-line message naming the input and the problem.
 Input load_input(const std::string& spec, const InputOptions& options = {});
 
