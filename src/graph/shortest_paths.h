@@ -1,0 +1,154 @@
+// Dijkstra and A* on the connectivity graph with a reusable workspace.
+//
+// Local searches (disks, geodesic midpoints) touch few vertices of a large graph, so the
+// workspace never clears its O(N) arrays: a generation stamp marks which entries are valid.
+// The heap is a lazy binary heap of (distance, vertex) — ties broken by vertex id, so every
+// search is deterministic.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <utility>
+#include <vector>
+
+#include "adamesh/graph.h"
+
+namespace adamesh::detail {
+
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
+
+class PathWorkspace {
+ public:
+  explicit PathWorkspace(std::size_t n) : dist_(n), pred_(n), seen_(n, 0), done_(n, 0) {}
+
+  /// Starts a new search: every vertex becomes unseen in O(1).
+  void begin() {
+    if (++gen_ == 0) {  // wrapped: clear once every 2^32 searches
+      std::fill(seen_.begin(), seen_.end(), 0);
+      std::fill(done_.begin(), done_.end(), 0);
+      gen_ = 1;
+    }
+    heap_.clear();
+  }
+  double dist(std::uint32_t v) const { return seen_[v] == gen_ ? dist_[v] : kInf; }
+  bool settled(std::uint32_t v) const { return done_[v] == gen_; }
+  std::uint32_t pred(std::uint32_t v) const { return pred_[v]; }
+
+  /// Lowers v's tentative distance (and remembers its predecessor); returns true if it improved.
+  bool relax(std::uint32_t v, double d, std::uint32_t from, double key) {
+    if (seen_[v] == gen_ && dist_[v] <= d) return false;
+    seen_[v] = gen_;
+    dist_[v] = d;
+    pred_[v] = from;
+    heap_.push_back({key, v});
+    std::push_heap(heap_.begin(), heap_.end(), Greater{});
+    return true;
+  }
+  /// Pops the next unsettled vertex in (key, id) order and settles it; false when empty.
+  bool pop(std::uint32_t& v) {
+    while (!heap_.empty()) {
+      std::pop_heap(heap_.begin(), heap_.end(), Greater{});
+      const auto e = heap_.back();
+      heap_.pop_back();
+      if (done_[e.second] == gen_) continue;
+      if (seen_[e.second] != gen_) continue;
+      done_[e.second] = gen_;
+      v = e.second;
+      return true;
+    }
+    return false;
+  }
+  /// Smallest key still in the heap (stale entries included), or infinity.
+  double peek_key() const { return heap_.empty() ? kInf : heap_.front().first; }
+
+ private:
+  struct Greater {
+    bool operator()(const std::pair<double, std::uint32_t>& a,
+                    const std::pair<double, std::uint32_t>& b) const {
+      return a > b;
+    }
+  };
+  std::vector<double> dist_;
+  std::vector<std::uint32_t> pred_;
+  std::vector<std::uint32_t> seen_, done_;
+  std::vector<std::pair<double, std::uint32_t>> heap_;
+  std::uint32_t gen_ = 0;
+};
+
+enum class Visit { expand, skip, stop };
+
+/// Dijkstra from `source` over vertices with distance ≤ limit. visit(v, d) is called when v is
+/// settled, in (distance, id) order; it returns expand (relax v's edges), skip (keep v settled
+/// but don't expand it) or stop (end the search). `allowed(v)` filters vertices (e.g. one
+/// component, or border vertices only).
+template <class Visitor, class Allowed>
+void dijkstra(const ConnectivityGraph& g, PathWorkspace& ws, std::uint32_t source, double limit,
+              Visitor&& visit, Allowed&& allowed) {
+  ws.begin();
+  ws.relax(source, 0.0, source, 0.0);
+  std::uint32_t v;
+  while (ws.pop(v)) {
+    const double d = ws.dist(v);
+    if (d > limit) break;
+    const Visit what = visit(v, d);
+    if (what == Visit::stop) return;
+    if (what == Visit::skip) continue;
+    const auto nb = g.neighbours(v);
+    const auto w = g.weights(v);
+    for (std::size_t i = 0; i < nb.size(); ++i) {
+      const std::uint32_t u = nb[i];
+      if (ws.settled(u) || !allowed(u)) continue;
+      const double nd = d + w[i];
+      if (nd <= limit) ws.relax(u, nd, v, nd);
+    }
+  }
+}
+
+template <class Visitor>
+void dijkstra(const ConnectivityGraph& g, PathWorkspace& ws, std::uint32_t source, double limit,
+              Visitor&& visit) {
+  dijkstra(g, ws, source, limit, std::forward<Visitor>(visit), [](std::uint32_t) { return true; });
+}
+
+/// A* shortest path from source to target with the Euclidean distance to the target's c-vertex
+/// as heuristic (admissible: no graph path is shorter than the straight segment). Returns the
+/// path source..target (empty when unreachable under `allowed`) and its length in `length`.
+template <class Allowed>
+std::vector<std::uint32_t> astar(const ConnectivityGraph& g, const SurfelComplex& sc,
+                                 PathWorkspace& ws, std::uint32_t source, std::uint32_t target,
+                                 double& length, Allowed&& allowed) {
+  const Vec3 t = sc.cvertex_position(target);
+  // Weights are floats: shrink the heuristic a hair so rounding never makes it inadmissible.
+  auto h = [&](std::uint32_t v) { return distance(sc.cvertex_position(v), t) * (1.0 - 1e-6); };
+  ws.begin();
+  ws.relax(source, 0.0, source, h(source));
+  std::uint32_t v;
+  length = kInf;
+  while (ws.pop(v)) {
+    const double d = ws.dist(v);
+    if (v == target) {
+      length = d;
+      break;
+    }
+    const auto nb = g.neighbours(v);
+    const auto w = g.weights(v);
+    for (std::size_t i = 0; i < nb.size(); ++i) {
+      const std::uint32_t u = nb[i];
+      if (ws.settled(u) || !allowed(u)) continue;
+      const double nd = d + w[i];
+      ws.relax(u, nd, v, nd + h(u));
+    }
+  }
+  std::vector<std::uint32_t> path;
+  if (length == kInf) return path;
+  for (std::uint32_t x = target;; x = ws.pred(x)) {
+    path.push_back(x);
+    if (x == source) break;
+  }
+  std::reverse(path.begin(), path.end());
+  return path;
+}
+
+}  // namespace adamesh::detail

@@ -1,0 +1,196 @@
+// Driver of the simplification stage: disk covering → Voronoi covering → local repair of violated
+// cells (ALGORITHM.md 2.4–2.5). Violated cells and their neighbours get their disks halved; the
+// uncovered surfels get new, smaller disks; the new centres enter the Voronoi covering by an
+// incremental multi-source Dijkstra, and only the cells it touched are checked again. A component
+// whose violations survive at r_min is meshed from its surfels instead (fallback).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+
+#include "adamesh/simplify.h"
+#include "disk_cover.h"
+#include "voronoi.h"
+
+namespace adamesh {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+double surfel_area(const SurfelComplex& sc, std::size_t s) {
+  const Vec3 c = sc.cvertex_position(s);
+  const auto nodes = sc.nodes_of(s);
+  double a = 0;
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    a += 0.5 * norm(cross(sc.node_position(nodes[i]) - c,
+                          sc.node_position(nodes[(i + 1) % nodes.size()]) - c));
+  return a;
+}
+
+}  // namespace
+
+Covering build_covering(const SurfelComplex& sc, const ConnectivityGraph& g,
+                        const SimplifyOptions& opt, SimplifyStats& stats) {
+  using namespace detail;
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::size_t n = g.num_vertices();
+  const double h = sc.grid.min_spacing();
+  const double unit = opt.unit == LengthUnit::voxels ? h : 1.0;
+
+  // Components: sizes, dropped ones.
+  Covering cov;
+  std::vector<std::size_t> comp_size(g.num_components, 0);
+  for (std::size_t v = 0; v < n; ++v) ++comp_size[g.component[v]];
+  cov.dropped.assign(g.num_components, 0);
+  cov.fallback.assign(g.num_components, 0);
+  std::vector<std::uint8_t> active(n, 1);
+  for (std::uint32_t c = 0; c < g.num_components; ++c)
+    if (opt.min_component_surfels > 0 && comp_size[c] < opt.min_component_surfels) {
+      cov.dropped[c] = 1;
+      ++stats.dropped_components;
+    }
+  double area = 0;
+  for (std::size_t v = 0; v < n; ++v) {
+    if (cov.dropped[g.component[v]]) active[v] = 0;
+    else area += surfel_area(sc, v);
+  }
+  stats.components = g.num_components - stats.dropped_components;
+
+  const double r_min = opt.r_min > 0 ? opt.r_min * unit : 2.0 * h;
+  double r_max = opt.r_max > 0 ? opt.r_max * unit : std::sqrt(area / std::max(1.0, opt.target_cells));
+  r_max = std::max(r_max, r_min);
+  stats.r_min = r_min;
+  stats.r_max = r_max;
+
+  DiskCover cover(sc, g, active, r_max, r_min, stats);
+  cover.seed();
+  cover.run();
+  stats.time_disk_cover_s += seconds_since(t0);
+
+  const auto t1 = std::chrono::steady_clock::now();
+  Voronoi vor(sc, g);
+  auto add_new_cells = [&] {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> cells;
+    for (auto d : cover.take_new_disks()) cells.push_back({d, cover.centre(d)});
+    vor.add_cells(cells);
+    return cells.size();
+  };
+  add_new_cells();
+  stats.regularized += vor.regularize();
+
+  std::vector<std::uint32_t> centre_of_cell;
+  auto refresh_centres = [&] {
+    centre_of_cell.resize(cover.num_disks());
+    for (std::uint32_t d = 0; d < cover.num_disks(); ++d) centre_of_cell[d] = cover.centre(d);
+  };
+  std::vector<std::uint32_t> comp_vertices_offset(g.num_components + 1, 0);
+  std::vector<std::uint32_t> comp_vertices(n);
+  {
+    for (std::size_t v = 0; v < n; ++v) ++comp_vertices_offset[g.component[v] + 1];
+    std::partial_sum(comp_vertices_offset.begin(), comp_vertices_offset.end(),
+                     comp_vertices_offset.begin());
+    std::vector<std::uint32_t> fill(comp_vertices_offset.begin(), comp_vertices_offset.end() - 1);
+    for (std::uint32_t v = 0; v < n; ++v) comp_vertices[fill[g.component[v]]++] = v;
+  }
+  auto fall_back = [&](std::uint32_t comp) {
+    if (cov.fallback[comp]) return;
+    cov.fallback[comp] = 1;
+    ++stats.fallback_components;
+    std::vector<std::uint32_t> verts(comp_vertices.begin() + comp_vertices_offset[comp],
+                                     comp_vertices.begin() + comp_vertices_offset[comp + 1]);
+    cover.deactivate(verts);
+    vor.remove_vertices(verts);
+  };
+
+  std::vector<std::uint32_t> nbrs;
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  std::vector<std::uint32_t> recheck;
+  std::size_t round = 0;
+  for (;; ++round) {
+    std::vector<std::uint32_t> violated;
+    auto to_check = vor.take_touched();
+    to_check.insert(to_check.end(), recheck.begin(), recheck.end());
+    std::sort(to_check.begin(), to_check.end());
+    to_check.erase(std::unique(to_check.begin(), to_check.end()), to_check.end());
+    for (auto c : to_check) {
+      if (!vor.cell_alive(c)) continue;
+      const int kind = vor.check_cell(c, nbrs);
+      if (kind != kOk) {
+        violated.push_back(c);
+        ++stats.violations_by_kind[kind];
+      }
+    }
+    refresh_centres();
+    std::vector<std::uint32_t> global_bad;
+    dual_triangles(sc, vor.cells(), centre_of_cell, triangles, global_bad,
+                   &stats.violations_by_kind);
+    violated.insert(violated.end(), global_bad.begin(), global_bad.end());
+    std::sort(violated.begin(), violated.end());
+    violated.erase(std::unique(violated.begin(), violated.end()), violated.end());
+    if (violated.empty()) break;
+    stats.violated_cells_repaired += violated.size();
+
+    if (round >= static_cast<std::size_t>(opt.max_rounds)) {
+      for (auto c : violated) fall_back(g.component[cover.centre(c)]);
+      stats.warnings.push_back("violated cells left after " + std::to_string(round) +
+                               " repair rounds: their components were meshed from surfels");
+      break;
+    }
+    // Halve the disks of the violated cells and of their neighbour cells.
+    std::vector<std::uint32_t> to_halve = violated;
+    for (auto c : violated) {
+      vor.neighbour_cells(c, nbrs);
+      to_halve.insert(to_halve.end(), nbrs.begin(), nbrs.end());
+    }
+    std::sort(to_halve.begin(), to_halve.end());
+    to_halve.erase(std::unique(to_halve.begin(), to_halve.end()), to_halve.end());
+    std::vector<std::uint8_t> progress(g.num_components, 0);
+    for (auto d : to_halve)
+      if (cover.halve(d)) progress[g.component[cover.centre(d)]] = 1;
+    cover.process_halvings();
+    cover.run();
+    const auto fresh = cover.take_new_disks();
+    for (auto d : fresh) progress[g.component[cover.centre(d)]] = 1;
+    {
+      std::vector<std::pair<std::uint32_t, std::uint32_t>> cells;
+      for (auto d : fresh) cells.push_back({d, cover.centre(d)});
+      vor.add_cells(cells);
+    }
+    stats.regularized += vor.regularize();
+    for (auto c : violated) {
+      const auto comp = g.component[cover.centre(c)];
+      if (!progress[comp] && !cov.fallback[comp]) {
+        fall_back(comp);
+        stats.warnings.push_back("component " + std::to_string(comp) +
+                                 ": violated cells persist at r_min; meshed from its surfels");
+      }
+    }
+    // Violated cells are checked again next round even if nothing reached them.
+    recheck.clear();
+    for (auto c : violated)
+      if (!cov.fallback[g.component[cover.centre(c)]]) recheck.push_back(c);
+  }
+  stats.repair_rounds = round;
+  stats.time_voronoi_s += seconds_since(t1);
+
+  // Compact: keep the cells that own vertices, in disk order.
+  std::vector<std::uint32_t> remap(cover.num_disks(), Covering::kNoCell);
+  for (std::uint32_t d = 0; d < cover.num_disks(); ++d) {
+    if (!vor.cell_alive(d)) continue;
+    remap[d] = static_cast<std::uint32_t>(cov.centre.size());
+    cov.centre.push_back(cover.centre(d));
+    cov.radius.push_back(static_cast<float>(cover.radius(d)));
+  }
+  cov.cell.resize(n);
+  for (std::size_t v = 0; v < n; ++v) {
+    const auto c = vor.cell(static_cast<std::uint32_t>(v));
+    cov.cell[v] = c == Voronoi::kNone ? Covering::kNoCell : remap[c];
+  }
+  stats.disks = cov.centre.size();
+  return cov;
+}
+
+}  // namespace adamesh

@@ -1,0 +1,332 @@
+// Dual triangulation of the Voronoi covering → base mesh M0 (ALGORITHM.md 2.6).
+//
+// One vertex per cell, at its centre (border cells: at the midpoint of the border segment of the
+// cell's border surfel nearest the centre, so the vertex lies on the volume face); vertices are
+// then moved onto the iso-surface by safeguarded Newton steps (border vertices inside their
+// face plane). Triangles come from the junction scan (voronoi.cpp). Components whose covering
+// could not be repaired are meshed from their surfels: each surfel polygon fanned around its
+// c-vertex, which is always a valid triangulation of the complex. Finally every component's
+// Euler characteristic and boundary-loop count are checked against the surfel complex; a
+// component that disagrees (never expected) also falls back, with a warning.
+#include <algorithm>
+#include <chrono>
+#include <numeric>
+#include <unordered_map>
+
+#include "adamesh/simplify.h"
+#include "graph/shortest_paths.h"
+#include "voronoi.h"
+
+namespace adamesh {
+
+namespace {
+
+struct ComponentTopology {
+  long chi = 0;
+  long loops = 0;
+  bool manifold = true;
+};
+
+/// χ and boundary loops of every component of the surfel complex.
+std::vector<ComponentTopology> complex_topology(const SurfelComplex& sc, const ConnectivityGraph& g) {
+  std::vector<ComponentTopology> t(g.num_components);
+  std::vector<long> nodes_c(g.num_components, 0), faces_c(g.num_components, 0),
+      half_c(g.num_components, 0);
+  for (std::size_t n = 0; n < sc.num_nodes(); ++n)
+    for (auto f : sc.node_fan[n])
+      if (f >= 0) {
+        ++nodes_c[g.component[f]];
+        break;
+      }
+  std::unordered_map<std::uint32_t, std::uint32_t> border_next;
+  for (std::uint32_t s = 0; s < sc.num_surfels(); ++s) {
+    ++faces_c[g.component[s]];
+    const auto nodes = sc.nodes_of(s);
+    const auto opp = sc.opposites_of(s);
+    for (std::size_t e = 0; e < nodes.size(); ++e) {
+      half_c[g.component[s]] += opp[e] < 0 ? 2 : 1;  // border segments have no twin
+      if (opp[e] < 0) border_next[nodes[e]] = nodes[(e + 1) % nodes.size()];
+    }
+  }
+  for (std::uint32_t c = 0; c < g.num_components; ++c)
+    t[c].chi = nodes_c[c] - half_c[c] / 2 + faces_c[c];
+  // Boundary loops: chains of border segments.
+  std::unordered_map<std::uint32_t, std::uint8_t> visited;
+  for (const auto& [start, next] : border_next) {
+    if (visited.count(start)) continue;
+    std::uint32_t a = start;
+    std::int32_t comp = -1;
+    while (!visited.count(a)) {
+      visited[a] = 1;
+      if (comp < 0)
+        for (auto f : sc.node_fan[a])
+          if (f >= 0) comp = static_cast<std::int32_t>(g.component[f]);
+      auto it = border_next.find(a);
+      if (it == border_next.end()) break;
+      a = it->second;
+    }
+    if (comp >= 0) ++t[comp].loops;
+  }
+  return t;
+}
+
+/// χ, boundary loops and manifoldness of every component of a mesh (components given per vertex).
+std::vector<ComponentTopology> mesh_topology(const Mesh& m, const std::vector<std::uint32_t>& comp,
+                                             std::size_t num_components) {
+  std::vector<ComponentTopology> t(num_components);
+  for (std::size_t v = 0; v < m.num_vertices(); ++v) t[comp[v]].chi += 1;
+  struct HalfEdge {
+    std::uint32_t a, b;
+    bool operator<(const HalfEdge& o) const { return a != o.a ? a < o.a : b < o.b; }
+    bool operator==(const HalfEdge& o) const { return a == o.a && b == o.b; }
+  };
+  std::vector<HalfEdge> he;
+  he.reserve(m.triangles.size());
+  for (std::size_t f = 0; f < m.num_triangles(); ++f) {
+    const auto* tri = &m.triangles[3 * f];
+    t[comp[tri[0]]].chi += 1;
+    for (int i = 0; i < 3; ++i) he.push_back({tri[i], tri[(i + 1) % 3]});
+  }
+  std::sort(he.begin(), he.end());
+  for (std::size_t i = 1; i < he.size(); ++i)
+    if (he[i] == he[i - 1]) t[comp[he[i].a]].manifold = false;  // repeated directed edge
+  // Undirected edges and boundary half-edges.
+  std::unordered_map<std::uint32_t, std::uint32_t> boundary_next;
+  std::vector<std::uint8_t> vertex_boundary_out(m.num_vertices(), 0);
+  for (const auto& h : he) {
+    const bool twin = std::binary_search(he.begin(), he.end(), HalfEdge{h.b, h.a});
+    if (twin) {
+      if (h.a < h.b) t[comp[h.a]].chi -= 1;
+    } else {
+      t[comp[h.a]].chi -= 1;
+      if (vertex_boundary_out[h.a]++) t[comp[h.a]].manifold = false;
+      boundary_next[h.a] = h.b;
+    }
+  }
+  std::vector<std::uint8_t> seen(m.num_vertices(), 0);
+  for (const auto& [start, next] : boundary_next) {
+    if (seen[start]) continue;
+    std::uint32_t a = start;
+    while (!seen[a]) {
+      seen[a] = 1;
+      auto it = boundary_next.find(a);
+      if (it == boundary_next.end()) {
+        t[comp[start]].manifold = false;
+        break;
+      }
+      a = it->second;
+    }
+    ++t[comp[start]].loops;
+  }
+  // Vertex links: the triangles around each vertex form one fan (one cycle or one path).
+  std::vector<std::uint32_t> offset(m.num_vertices() + 1, 0);
+  for (auto v : m.triangles) ++offset[v + 1];
+  std::partial_sum(offset.begin(), offset.end(), offset.begin());
+  std::vector<std::uint32_t> corner(m.triangles.size());
+  {
+    std::vector<std::uint32_t> fill(offset.begin(), offset.end() - 1);
+    for (std::size_t i = 0; i < m.triangles.size(); ++i) corner[fill[m.triangles[i]]++] = static_cast<std::uint32_t>(i);
+  }
+  for (std::uint32_t v = 0; v < m.num_vertices(); ++v) {
+    const std::uint32_t deg = offset[v + 1] - offset[v];
+    if (deg == 0) continue;
+    // Walk the fan from one corner via "next" vertices; count the triangles reached.
+    std::unordered_map<std::uint32_t, std::uint32_t> next_of;  // link edge b -> c
+    for (std::uint32_t i = offset[v]; i < offset[v + 1]; ++i) {
+      const std::uint32_t c = corner[i], f = c / 3, k = c % 3;
+      next_of[m.triangles[3 * f + (k + 1) % 3]] = m.triangles[3 * f + (k + 2) % 3];
+    }
+    std::uint32_t start = next_of.begin()->first;
+    if (vertex_boundary_out[v]) {  // on the boundary: start where no triangle ends
+      std::unordered_map<std::uint32_t, std::uint8_t> is_target;
+      for (const auto& [b, c] : next_of) is_target[c] = 1;
+      for (const auto& [b, c] : next_of)
+        if (!is_target.count(b)) start = b;
+    }
+    std::uint32_t count = 0, at = start;
+    while (count <= deg) {
+      auto it = next_of.find(at);
+      if (it == next_of.end()) break;
+      ++count;
+      at = it->second;
+      if (at == start) break;
+    }
+    if (count != deg) t[comp[v]].manifold = false;
+  }
+  return t;
+}
+
+/// Axis a and index value of the volume face a border segment (n0, n1) lies on.
+bool border_face(const SurfelComplex& sc, std::uint32_t n0, std::uint32_t n1, int& axis, bool& high) {
+  const auto& d = sc.grid.dims;
+  auto decode = [&](std::uint32_t n, std::array<std::int64_t, 3>& ijk, int& ax) {
+    const std::uint64_t key = sc.node_key[n];
+    ax = static_cast<int>(key % 3);
+    std::uint64_t lin = key / 3;
+    ijk[0] = static_cast<std::int64_t>(lin % d[0]);
+    lin /= d[0];
+    ijk[1] = static_cast<std::int64_t>(lin % d[1]);
+    ijk[2] = static_cast<std::int64_t>(lin / d[1]);
+  };
+  std::array<std::int64_t, 3> p0, p1;
+  int a0, a1;
+  decode(n0, p0, a0);
+  decode(n1, p1, a1);
+  for (int a = 0; a < 3; ++a) {
+    if (a == a0 || a == a1 || p0[a] != p1[a]) continue;
+    if (p0[a] == 0 || p0[a] == d[a] - 1) {
+      axis = a;
+      high = p0[a] != 0;
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
+                         const Covering& cov_in, const ScalarField* field,
+                         const SimplifyOptions& opt, SimplifyStats stats) {
+  using namespace detail;
+  const auto t0 = std::chrono::steady_clock::now();
+  const double h = sc.grid.min_spacing();
+  Covering cov = cov_in;
+  const auto reference = complex_topology(sc, g);
+  const Mat3 a = sc.grid.index_to_world_matrix();
+
+  BaseMesh bm;
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    bm = BaseMesh{};
+    std::vector<std::array<std::uint32_t, 3>> tris;
+    std::vector<std::uint32_t> bad;
+    dual_triangles(sc, cov.cell, cov.centre, tris, bad, nullptr);
+    for (auto c : bad) {
+      const auto comp = g.component[cov.centre[c]];
+      if (!cov.fallback[comp]) {
+        cov.fallback[comp] = 1;
+        ++stats.fallback_components;
+        stats.warnings.push_back("component " + std::to_string(comp) +
+                                 ": dual not valid; meshed from its surfels");
+      }
+    }
+    // Cell vertices.
+    const std::size_t ncell = cov.centre.size();
+    std::vector<std::uint32_t> vertex_of_cell(ncell, Covering::kNoCell);
+    std::vector<std::uint32_t> border_surfel(ncell, Covering::kNoCell);
+    std::vector<double> border_d(ncell, kInf);
+    for (std::uint32_t v = 0; v < g.num_vertices(); ++v) {
+      const auto c = cov.cell[v];
+      if (c == Covering::kNoCell || !g.border[v]) continue;
+      const double d = distance(sc.cvertex_position(v), sc.cvertex_position(cov.centre[c]));
+      if (d < border_d[c]) {
+        border_d[c] = d;
+        border_surfel[c] = v;
+      }
+    }
+    for (std::uint32_t c = 0; c < ncell; ++c) {
+      const auto comp = g.component[cov.centre[c]];
+      if (cov.fallback[comp]) continue;
+      Vec3 p = sc.cvertex_position(cov.centre[c]);
+      std::uint32_t anchor = cov.centre[c];
+      ProjectOptions po;
+      po.max_steps = 8;
+      po.tolerance = 1e-4 * h;
+      po.max_step = 0.5 * h;
+      const bool on_border = border_surfel[c] != Covering::kNoCell;
+      if (on_border) {
+        anchor = border_surfel[c];
+        const auto nodes = sc.nodes_of(anchor);
+        const auto opp = sc.opposites_of(anchor);
+        for (std::size_t e = 0; e < nodes.size(); ++e) {
+          if (opp[e] >= 0) continue;
+          const auto n0 = nodes[e], n1 = nodes[(e + 1) % nodes.size()];
+          p = 0.5 * (sc.node_position(n0) + sc.node_position(n1));
+          int axis;
+          bool high;
+          if (border_face(sc, n0, n1, axis, high))
+            po.plane_normal = cross(a.column((axis + 1) % 3), a.column((axis + 2) % 3));
+          break;
+        }
+      }
+      if (field && opt.project_vertices) {
+        const ProjectResult r = project_to_iso(*field, sc.iso, p, po);
+        if (distance(r.point, p) < 2.0 * h) p = r.point;
+      }
+      vertex_of_cell[c] = bm.mesh.add_vertex(p);
+      bm.anchor.push_back(anchor);
+      bm.border.push_back(on_border ? 1 : 0);
+      bm.component.push_back(comp);
+    }
+    for (const auto& t : tris) {
+      if (cov.fallback[g.component[cov.centre[t[0]]]]) continue;
+      bm.mesh.add_triangle(vertex_of_cell[t[0]], vertex_of_cell[t[1]], vertex_of_cell[t[2]]);
+    }
+    // Fallback components: fan every surfel polygon around its c-vertex.
+    std::unordered_map<std::uint32_t, std::uint32_t> vertex_of_node;
+    for (std::uint32_t s = 0; s < sc.num_surfels(); ++s) {
+      const auto comp = g.component[s];
+      if (!cov.fallback[comp] || cov.dropped[comp]) continue;
+      const auto nodes = sc.nodes_of(s);
+      auto node_vertex = [&](std::uint32_t n) {
+        auto it = vertex_of_node.find(n);
+        if (it != vertex_of_node.end()) return it->second;
+        const auto id = bm.mesh.add_vertex(sc.node_position(n));
+        std::uint32_t anchor = s;
+        bool border = false;
+        for (auto f : sc.node_fan[n]) border |= f < 0;
+        bm.anchor.push_back(anchor);
+        bm.border.push_back(border ? 1 : 0);
+        bm.component.push_back(comp);
+        vertex_of_node.emplace(n, id);
+        return id;
+      };
+      Vec3 c = sc.cvertex_position(s);
+      if (field && opt.project_vertices) {
+        ProjectOptions po;
+        po.tolerance = 1e-4 * h;
+        po.max_step = 0.25 * h;
+        const ProjectResult r = project_to_iso(*field, sc.iso, c, po);
+        if (distance(r.point, c) < 0.5 * h) c = r.point;
+      }
+      const auto cv = bm.mesh.add_vertex(c);
+      bm.anchor.push_back(s);
+      bm.border.push_back(0);
+      bm.component.push_back(comp);
+      for (std::size_t i = 0; i < nodes.size(); ++i)
+        bm.mesh.add_triangle(cv, node_vertex(nodes[i]), node_vertex(nodes[(i + 1) % nodes.size()]));
+    }
+    // Check every component against the surfel complex.
+    const auto got = mesh_topology(bm.mesh, bm.component, g.num_components);
+    bool redo = false;
+    for (std::uint32_t c = 0; c < g.num_components; ++c) {
+      if (cov.dropped[c] || cov.fallback[c]) continue;
+      if (got[c].chi != reference[c].chi || got[c].loops != reference[c].loops ||
+          !got[c].manifold) {
+        cov.fallback[c] = 1;
+        ++stats.fallback_components;
+        stats.warnings.push_back("component " + std::to_string(c) + ": base mesh χ=" +
+                                 std::to_string(got[c].chi) + " loops=" +
+                                 std::to_string(got[c].loops) + " differs from the surfels (χ=" +
+                                 std::to_string(reference[c].chi) + " loops=" +
+                                 std::to_string(reference[c].loops) + "); meshed from its surfels");
+        redo = true;
+      }
+    }
+    if (!redo) break;
+  }
+  stats.time_dual_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  bm.stats = std::move(stats);
+  return bm;
+}
+
+BaseMesh simplify(const SurfelComplex& complex, const ScalarField* field,
+                  const SimplifyOptions& options) {
+  const ConnectivityGraph g = build_graph(complex);
+  SimplifyStats stats;
+  const Covering cov = build_covering(complex, g, options, stats);
+  if (options.validate) stats.validation = validate_covering(complex, g, cov);
+  return build_base_mesh(complex, g, cov, field, options, std::move(stats));
+}
+
+}  // namespace adamesh

@@ -1,0 +1,424 @@
+// Geodesic Voronoi covering VC_G and its closed-ball tests (ALGORITHM.md 2.5).
+//
+// Cells are grown by multi-source Dijkstra from the disk centres (ties: smaller centre id), and
+// updated incrementally when repair adds centres. A cell passes when, on the surfel complex, it
+// is one manifold disk (edge-connected, χ = 1, one boundary loop, no pinch), each neighbour cell
+// occurs along its boundary loop in one arc, it has at least 3 neighbours (2 with a border arc)
+// and it meets the volume border in at most one arc. Junctions — nodes whose complete fan holds
+// three or four distinct cells — are the dual's triangles and quads.
+#include "voronoi.h"
+
+#include <algorithm>
+#include <cassert>
+#include <queue>
+#include <unordered_set>
+
+#include "graph/shortest_paths.h"
+
+namespace adamesh::detail {
+
+bool ccw_fan(const SurfelComplex& sc, std::uint32_t n, std::array<std::int32_t, 4>& out) {
+  const auto& fan = sc.node_fan[n];
+  for (auto f : fan)
+    if (f < 0) return false;
+  const auto u = static_cast<std::uint32_t>(fan[0]);
+  const auto nodes = sc.nodes_of(u);
+  const auto opp = sc.opposites_of(u);
+  const std::size_t k = nodes.size();
+  std::size_t i = 0;
+  while (i < k && nodes[i] != n) ++i;
+  assert(i < k);
+  const std::int32_t incoming = opp[(i + k - 1) % k];
+  // Seen from outside, the surfels around a node follow u, the neighbour across u's incoming
+  // edge, the diagonal one, the neighbour across u's outgoing edge (counter-clockwise).
+  if (fan[1] == incoming) out = fan;
+  else out = {fan[0], fan[3], fan[2], fan[1]};
+  return true;
+}
+
+Voronoi::Voronoi(const SurfelComplex& sc, const ConnectivityGraph& g)
+    : sc_(sc), g_(g), cell_(g.num_vertices(), kNone), dist_(g.num_vertices(), kInf),
+      stamp_(g.num_vertices(), 0) {}
+
+bool Voronoi::better(double d, std::uint32_t cv, std::uint32_t v) const {
+  if (cell_[v] == kNone) return true;
+  if (d != dist_[v]) return d < dist_[v];
+  return cv < centre_[cell_[v]];
+}
+
+void Voronoi::add_cells(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& cells) {
+  struct Entry {
+    double d;
+    std::uint32_t cv, v, c;
+    bool operator>(const Entry& o) const {
+      if (d != o.d) return d > o.d;
+      if (cv != o.cv) return cv > o.cv;
+      return v > o.v;
+    }
+  };
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
+  for (const auto& [c, x] : cells) {
+    if (c >= centre_.size()) {
+      centre_.resize(c + 1, kNone);
+      size_.resize(c + 1, 0);
+      touched_flag_.resize(c + 1, 0);
+    }
+    centre_[c] = x;
+    heap.push({0.0, x, x, c});
+  }
+  auto assign = [&](std::uint32_t v, std::uint32_t c, double d) { reassign(v, c, d); };
+  while (!heap.empty()) {
+    const Entry e = heap.top();
+    heap.pop();
+    if (!better(e.d, e.cv, e.v)) continue;  // stale, or a duplicate of the current assignment
+    assign(e.v, e.c, e.d);
+    const auto nb = g_.neighbours(e.v);
+    const auto w = g_.weights(e.v);
+    for (std::size_t i = 0; i < nb.size(); ++i) {
+      const double nd = e.d + w[i];
+      if (better(nd, e.cv, nb[i])) heap.push({nd, e.cv, nb[i], e.c});
+    }
+  }
+}
+
+void Voronoi::reassign(std::uint32_t v, std::uint32_t c, double d) {
+  const std::uint32_t old = cell_[v];
+  if (old != kNone) --size_[old];
+  touch(old);
+  cell_[v] = c;
+  dist_[v] = d;
+  ++size_[c];
+  touch(c);
+  for (auto nb : g_.neighbours(v)) touch(cell_[nb]);
+  changed_.push_back(v);
+}
+
+namespace {
+
+/// True when some label occurs in two separate cyclic runs of the 4-fan.
+bool pinched_fan(const std::array<std::uint32_t, 4>& c) {
+  std::array<std::uint32_t, 4> runs;
+  int r = 0;
+  for (int q = 0; q < 4; ++q)
+    if (r == 0 || runs[r - 1] != c[q]) runs[r++] = c[q];
+  if (r > 1 && runs[0] == runs[r - 1]) --r;
+  for (int i = 0; i < r; ++i)
+    for (int j = i + 1; j < r; ++j)
+      if (runs[i] == runs[j]) return true;
+  return false;
+}
+
+}  // namespace
+
+std::size_t Voronoi::regularize() {
+  std::size_t moves = 0;
+  for (int pass = 0; pass < 8 && !changed_.empty(); ++pass) {
+    std::vector<std::uint32_t> nodes;
+    for (auto v : changed_)
+      for (auto n : sc_.nodes_of(v)) nodes.push_back(n);
+    changed_.clear();
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    std::array<std::int32_t, 4> fan;
+    for (auto n : nodes) {
+      if (!ccw_fan(sc_, n, fan)) continue;
+      std::array<std::uint32_t, 4> c;
+      bool skip = false;
+      for (int q = 0; q < 4; ++q) {
+        c[q] = cell_[static_cast<std::uint32_t>(fan[q])];
+        skip |= c[q] == kNone;
+      }
+      if (skip || !pinched_fan(c)) continue;
+      // Candidate moves: one fan surfel takes the cell of a fan neighbour.
+      double best = kInf;
+      std::uint32_t best_v = kNone, best_c = kNone;
+      double best_d = 0;
+      for (int q = 0; q < 4; ++q) {
+        const auto s = static_cast<std::uint32_t>(fan[q]);
+        if (centre_[c[q]] == s) continue;  // centres stay in their cells
+        for (int side : {1, 3}) {
+          const std::uint32_t x = c[(q + side) % 4];
+          if (x == c[q]) continue;
+          auto trial = c;
+          trial[q] = x;
+          if (pinched_fan(trial)) continue;
+          double dx = kInf;  // distance to x's centre through a neighbour in x
+          const auto nb = g_.neighbours(s);
+          const auto w = g_.weights(s);
+          for (std::size_t i = 0; i < nb.size(); ++i)
+            if (cell_[nb[i]] == x) dx = std::min(dx, dist_[nb[i]] + w[i]);
+          const double penalty = dx - dist_[s];
+          if (penalty < best || (penalty == best && s < best_v)) {
+            best = penalty;
+            best_v = s;
+            best_c = x;
+            best_d = dx;
+          }
+        }
+      }
+      if (best_v == kNone) continue;
+      reassign(best_v, best_c, best_d);
+      ++moves;
+    }
+  }
+  changed_.clear();
+  return moves;
+}
+
+void Voronoi::set_assignment(const std::vector<std::uint32_t>& cell,
+                             const std::vector<std::uint32_t>& centres) {
+  cell_ = cell;
+  centre_ = centres;
+  size_.assign(centres.size(), 0);
+  touched_flag_.assign(centres.size(), 0);
+  for (auto c : cell_)
+    if (c != kNone) ++size_[c];
+}
+
+void Voronoi::remove_vertices(const std::vector<std::uint32_t>& vertices) {
+  for (auto v : vertices) {
+    if (cell_[v] == kNone) continue;
+    --size_[cell_[v]];
+    cell_[v] = kNone;
+    dist_[v] = kInf;
+  }
+}
+
+std::vector<std::uint32_t> Voronoi::take_touched() {
+  std::vector<std::uint32_t> out;
+  out.swap(touched_);
+  for (auto c : out) touched_flag_[c] = 0;
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+void Voronoi::members_of(std::uint32_t c, std::vector<std::uint32_t>& members) {
+  // The cell is connected in G: shortest-path trees stay inside their cell.
+  const std::uint32_t gen = next_stamp();
+  const std::uint32_t x = centre_[c];
+  members.assign(1, x);
+  stamp_[x] = gen;
+  for (std::size_t i = 0; i < members.size(); ++i)
+    for (auto nb : g_.neighbours(members[i]))
+      if (cell_[nb] == c && stamp_[nb] != gen) {
+        stamp_[nb] = gen;
+        members.push_back(nb);
+      }
+}
+
+void Voronoi::neighbour_cells(std::uint32_t c, std::vector<std::uint32_t>& out) {
+  out.clear();
+  if (c >= size_.size() || size_[c] == 0) return;
+  std::vector<std::uint32_t> members;
+  members_of(c, members);
+  for (auto v : members)
+    for (auto nb : g_.neighbours(v))
+      if (cell_[nb] != c && cell_[nb] != kNone) out.push_back(cell_[nb]);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
+int Voronoi::check_cell(std::uint32_t c, std::vector<std::uint32_t>& neighbours) {
+  neighbours.clear();
+  if (size_[c] == 0) return kOk;  // empty (absorbed) cell: nothing to dualise
+  const std::uint32_t x = centre_[c];
+  if (cell_[x] != c) return kNotDisk;
+  std::vector<std::uint32_t> members;
+  members_of(c, members);
+  if (members.size() != size_[c]) return kNotDisk;
+
+  // Edge-connectivity across polygon edges (corner contacts do not connect a disk).
+  next_stamp();
+  std::vector<std::uint32_t> queue{x};
+  stamp_[x] = gen_;
+  for (std::size_t i = 0; i < queue.size(); ++i)
+    for (auto o : sc_.opposites_of(queue[i]))
+      if (o >= 0 && cell_[o] == c && stamp_[o] != gen_) {
+        stamp_[o] = gen_;
+        queue.push_back(static_cast<std::uint32_t>(o));
+      }
+  if (queue.size() != members.size()) return kNotDisk;
+
+  struct HalfEdge {
+    std::uint32_t a, b, label;
+  };
+  constexpr std::uint32_t kBorder = kNone - 1;
+  std::vector<HalfEdge> boundary;
+  std::vector<std::uint32_t> nodes;
+  std::size_t interior_half = 0;
+  for (auto u : members) {
+    const auto nd = sc_.nodes_of(u);
+    const auto op = sc_.opposites_of(u);
+    const std::size_t k = nd.size();
+    for (std::size_t e = 0; e < k; ++e) {
+      nodes.push_back(nd[e]);
+      const std::int32_t o = op[e];
+      if (o >= 0 && cell_[o] == c) ++interior_half;
+      else boundary.push_back({nd[e], nd[(e + 1) % k], o < 0 ? kBorder : cell_[o]});
+    }
+  }
+  std::sort(nodes.begin(), nodes.end());
+  const auto v_count = static_cast<long>(std::unique(nodes.begin(), nodes.end()) - nodes.begin());
+  const long e_count = static_cast<long>(interior_half / 2 + boundary.size());
+  const long chi = v_count - e_count + static_cast<long>(members.size());
+  if (chi != 1 || boundary.empty()) return kNotDisk;
+
+  // One boundary loop without pinches: each boundary node starts exactly one half-edge.
+  std::sort(boundary.begin(), boundary.end(),
+            [](const HalfEdge& p, const HalfEdge& q) { return p.a < q.a; });
+  for (std::size_t i = 1; i < boundary.size(); ++i)
+    if (boundary[i].a == boundary[i - 1].a) return kNotDisk;
+  std::vector<std::uint32_t> labels;
+  labels.reserve(boundary.size());
+  std::size_t at = 0;
+  for (std::size_t step = 0; step < boundary.size(); ++step) {
+    labels.push_back(boundary[at].label);
+    const std::uint32_t b = boundary[at].b;
+    auto it = std::lower_bound(boundary.begin(), boundary.end(), b,
+                               [](const HalfEdge& h, std::uint32_t key) { return h.a < key; });
+    if (it == boundary.end() || it->a != b) return kNotDisk;
+    at = static_cast<std::size_t>(it - boundary.begin());
+    if (at == 0 && step + 1 != boundary.size()) return kNotDisk;  // closed early: two loops
+  }
+  if (at != 0) return kNotDisk;
+
+  // Runs of neighbour labels around the loop.
+  std::vector<std::uint32_t> runs;
+  for (std::size_t i = 0; i < labels.size(); ++i)
+    if (runs.empty() || runs.back() != labels[i]) runs.push_back(labels[i]);
+  if (runs.size() > 1 && runs.front() == runs.back()) runs.pop_back();
+  std::vector<std::uint32_t> sorted = runs;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t i = 1; i < sorted.size(); ++i)
+    if (sorted[i] == sorted[i - 1]) return sorted[i] == kBorder ? kBorderArcs : kPairBoundary;
+  const bool has_border = std::binary_search(sorted.begin(), sorted.end(), kBorder);
+  for (auto l : runs)
+    if (l != kBorder) neighbours.push_back(l);
+  if (neighbours.size() < (has_border ? 2u : 3u)) return kFewNeighbours;
+  return kOk;
+}
+
+void scan_junctions(const SurfelComplex& sc, const std::vector<std::uint32_t>& cell,
+                    std::vector<Junction>& junctions, std::vector<std::uint32_t>& pinched) {
+  junctions.clear();
+  pinched.clear();
+  std::array<std::int32_t, 4> fan;
+  for (std::uint32_t n = 0; n < sc.num_nodes(); ++n) {
+    if (!ccw_fan(sc, n, fan)) continue;
+    std::array<std::uint32_t, 4> c;
+    bool skip = false;
+    for (int q = 0; q < 4; ++q) {
+      c[q] = cell[static_cast<std::uint32_t>(fan[q])];
+      if (c[q] == Voronoi::kNone) skip = true;
+    }
+    if (skip) continue;
+    // Cyclic runs of equal cells.
+    std::array<std::uint32_t, 4> runs;
+    int r = 0;
+    for (int q = 0; q < 4; ++q)
+      if (r == 0 || runs[r - 1] != c[q]) runs[r++] = c[q];
+    if (r > 1 && runs[0] == runs[r - 1]) --r;
+    if (r <= 2) continue;  // inside a cell or on a pair boundary
+    bool repeat = false;
+    for (int i = 0; i < r; ++i)
+      for (int j = i + 1; j < r; ++j)
+        if (runs[i] == runs[j]) repeat = true;
+    if (repeat) {
+      for (int i = 0; i < r; ++i) pinched.push_back(runs[i]);
+      continue;
+    }
+    Junction j{n, static_cast<std::uint8_t>(r), runs};
+    junctions.push_back(j);
+  }
+  std::sort(pinched.begin(), pinched.end());
+  pinched.erase(std::unique(pinched.begin(), pinched.end()), pinched.end());
+}
+
+}  // namespace adamesh::detail
+
+namespace adamesh::detail {
+
+void dual_triangles(const SurfelComplex& sc, const std::vector<std::uint32_t>& cell,
+                    const std::vector<std::uint32_t>& centre_of_cell,
+                    std::vector<std::array<std::uint32_t, 3>>& triangles,
+                    std::vector<std::uint32_t>& violated, std::vector<std::size_t>* kinds) {
+  std::vector<Junction> junctions;
+  std::vector<std::uint32_t> pinched;
+  scan_junctions(sc, cell, junctions, pinched);
+  violated.insert(violated.end(), pinched.begin(), pinched.end());
+  if (kinds) (*kinds)[kFanPinch] += pinched.size();
+
+  // Edges of the dual: pairs of cells adjacent across a polygon edge.
+  auto key = [](std::uint32_t a, std::uint32_t b) {
+    if (a > b) std::swap(a, b);
+    return (std::uint64_t(a) << 32) | b;
+  };
+  std::vector<std::uint64_t> edges;
+  for (std::uint32_t u = 0; u < sc.num_surfels(); ++u) {
+    if (cell[u] == Voronoi::kNone) continue;
+    for (auto o : sc.opposites_of(u))
+      if (o >= 0 && cell[o] != cell[u] && cell[o] != Voronoi::kNone && cell[u] < cell[o])
+        edges.push_back(key(cell[u], cell[o]));
+  }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  std::unordered_set<std::uint64_t> added;  // diagonals chosen for quads so far
+  auto has_edge = [&](std::uint32_t a, std::uint32_t b) {
+    const auto k = key(a, b);
+    return std::binary_search(edges.begin(), edges.end(), k) ||
+           added.count(k) != 0;
+  };
+
+  triangles.clear();
+  for (const auto& j : junctions) {
+    const auto& c = j.cell;
+    if (j.count == 3) {
+      triangles.push_back({c[0], c[1], c[2]});
+      continue;
+    }
+    auto len = [&](std::uint32_t a, std::uint32_t b) {
+      return distance(sc.cvertex_position(centre_of_cell[a]), sc.cvertex_position(centre_of_cell[b]));
+    };
+    const bool ac_exists = has_edge(c[0], c[2]), bd_exists = has_edge(c[1], c[3]);
+    bool use_ac;
+    if (ac_exists && bd_exists) {
+      for (int q = 0; q < 4; ++q) violated.push_back(c[q]);
+      if (kinds) ++(*kinds)[kFanPinch];
+      continue;
+    } else if (ac_exists) {
+      use_ac = false;
+    } else if (bd_exists) {
+      use_ac = true;
+    } else {
+      const double lac = len(c[0], c[2]), lbd = len(c[1], c[3]);
+      use_ac = lac < lbd || (lac == lbd && std::min(c[0], c[2]) < std::min(c[1], c[3]));
+    }
+    if (use_ac) {
+      triangles.push_back({c[0], c[1], c[2]});
+      triangles.push_back({c[0], c[2], c[3]});
+      added.insert(key(c[0], c[2]));
+    } else {
+      triangles.push_back({c[0], c[1], c[3]});
+      triangles.push_back({c[1], c[2], c[3]});
+      added.insert(key(c[1], c[3]));
+    }
+  }
+  // Two junctions with the same three cells give the same triangle twice.
+  std::vector<std::pair<std::array<std::uint32_t, 3>, std::size_t>> sorted;
+  sorted.reserve(triangles.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    auto s = triangles[t];
+    std::sort(s.begin(), s.end());
+    sorted.push_back({s, t});
+  }
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t i = 1; i < sorted.size(); ++i)
+    if (sorted[i].first == sorted[i - 1].first) {
+      for (auto c : sorted[i].first) violated.push_back(c);
+      if (kinds) ++(*kinds)[kDuplicate];
+    }
+  std::sort(violated.begin(), violated.end());
+  violated.erase(std::unique(violated.begin(), violated.end()), violated.end());
+}
+
+}  // namespace adamesh::detail
