@@ -481,10 +481,21 @@ std::uint64_t open_piece(const std::string& header, const DataPiece& piece, Data
   return off;
 }
 
-}  // namespace
+// Errors inside a detached data file name the header first: "<header>: data file <msg>".
+template <class F>
+void in_piece(const std::string& header, const DataPiece& piece, F&& f) {
+  if (piece.file == header) return f();
+  try {
+    f();
+  } catch (const Error& e) {
+    const std::string msg = e.what();
+    if (msg.rfind(header + ": ", 0) == 0) throw;
+    throw Error(e.status(), header + ": data file " + msg);
+  }
+}
 
-void check_data_piece(const std::string& header, const DataPiece& piece, DataEncoding enc,
-                      ScalarType type, std::size_t bytes) {
+void check_piece(const std::string& header, const DataPiece& piece, DataEncoding enc,
+                 ScalarType type, std::size_t bytes) {
   std::optional<InputFile> file;
   std::uint64_t off = open_piece(header, piece, enc, file);
   const InputFile& f = *file;
@@ -519,8 +530,8 @@ void check_data_piece(const std::string& header, const DataPiece& piece, DataEnc
   }
 }
 
-void read_data_piece(const std::string& header, const DataPiece& piece, DataEncoding enc,
-                     ScalarType type, std::byte* dst, std::size_t bytes) {
+void read_piece(const std::string& header, const DataPiece& piece, DataEncoding enc,
+                ScalarType type, std::byte* dst, std::size_t bytes) {
   std::optional<InputFile> file;
   std::uint64_t off = open_piece(header, piece, enc, file);
   const InputFile& f = *file;
@@ -556,6 +567,18 @@ void read_data_piece(const std::string& header, const DataPiece& piece, DataEnco
       return;
     }
   }
+}
+
+}  // namespace
+
+void check_data_piece(const std::string& header, const DataPiece& piece, DataEncoding enc,
+                      ScalarType type, std::size_t bytes) {
+  in_piece(header, piece, [&] { check_piece(header, piece, enc, type, bytes); });
+}
+
+void read_data_piece(const std::string& header, const DataPiece& piece, DataEncoding enc,
+                     ScalarType type, std::byte* dst, std::size_t bytes) {
+  in_piece(header, piece, [&] { read_piece(header, piece, enc, type, dst, bytes); });
 }
 
 // ------------------------------------------------------------------------------------ base64
