@@ -19,10 +19,12 @@
 #include <tbb/blocked_range.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <string>
@@ -30,6 +32,7 @@
 #include "adamesh/error.h"
 #include "adamesh/surfels.h"
 #include "surfels/cell_table.h"
+#include "surfels/sized.h"
 
 namespace adamesh {
 
@@ -56,7 +59,8 @@ class Extractor {
         sgn_(inside_sign > 0 ? 1.0 : -1.0),
         origin_(v.grid.origin),
         to_world_(v.grid.index_to_world_matrix()),
-        mirrored_(to_world_.determinant() < 0) {
+        mirrored_(to_world_.determinant() < 0),
+        table_(detail::cell_table()) {
     const auto& edges = detail::cube_edges();
     for (int e = 0; e < 12; ++e) {
       const auto& ce = edges[e];
@@ -83,15 +87,10 @@ class Extractor {
       out.plane_nodes[k] = count_plane_nodes(s0.get(), top ? s1.get() : nullptr);
       if (top) {
         std::int64_t surfels = 0, entries = 0;
-        for (std::int64_t j = 0; j + 1 < ny_; ++j)
-          for (std::int64_t i = 0; i + 1 < nx_; ++i) {
-            const std::int64_t p = j * nx_ + i;
-            const int c = q0[p] | (q1[p] << 4);
-            if (c == 0 || c == 255) continue;
-            const CellConfig& cfg = detail::cell_config(c, decisions(c, i, j, k), mirrored_);
-            surfels += cfg.num_cycles;
-            entries += cfg.num_entries;
-          }
+        for_active_voxels(q0.get(), q1.get(), [&](std::int64_t i, std::int64_t j, int c) {
+          entries += table_.entries(c);
+          surfels += table_.config(c, decisions(c, i, j, k), mirrored_).num_cycles;
+        });
         out.layer_surfels[k] = surfels;
         out.layer_entries[k] = entries;
       }
@@ -165,15 +164,41 @@ class Extractor {
     return n;
   }
 
+  /// Calls f(i, j, case) for the voxels of a layer with a sign change, in (j, i) order; q0/q1
+  /// are the quad codes of its bottom and top planes. Runs of 8 empty voxels (all corners of one
+  /// sign) are skipped with one 64-bit test.
+  template <class F>
+  void for_active_voxels(const std::uint8_t* q0, const std::uint8_t* q1, F&& f) const {
+    constexpr std::uint64_t kFull = 0x0F0F0F0F0F0F0F0Full;
+    const std::int64_t n = nx_ - 1;
+    for (std::int64_t j = 0; j + 1 < ny_; ++j) {
+      const std::uint8_t* a = q0 + j * nx_;
+      const std::uint8_t* b = q1 + j * nx_;
+      for (std::int64_t i0 = 0; i0 < n; i0 += 8) {
+        const std::int64_t m = std::min<std::int64_t>(8, n - i0);
+        if (m == 8) {
+          std::uint64_t wa, wb;
+          std::memcpy(&wa, a + i0, 8);
+          std::memcpy(&wb, b + i0, 8);
+          if ((wa | wb) == 0 || (wa & wb) == kFull) continue;
+        }
+        for (std::int64_t i = i0; i < i0 + m; ++i) {
+          const int c = a[i] | (b[i] << 4);
+          if (c != 0 && c != 255) f(i, j, c);
+        }
+      }
+    }
+  }
+
   /// Decision bits for the ambiguous faces of a voxel (asymptotic decider on face values).
   unsigned decisions(int c, std::int64_t i, std::int64_t j, std::int64_t k) const {
-    const unsigned amb = detail::ambiguous_faces(c);
+    const unsigned amb = table_.ambiguous(c);
     if (!amb) return 0;
     const std::int64_t base = i + nx_ * (j + ny_ * k);
     double v[8];
     for (int corner = 0; corner < 8; ++corner)
-      v[corner] = value(base + (corner & 1) + ((corner >> 1) & 1) * nx_ +
-                        ((corner >> 2) & 1) * plane_);
+      v[corner] =
+          value(base + (corner & 1) + ((corner >> 1) & 1) * nx_ + ((corner >> 2) & 1) * plane_);
     unsigned bits = 0;
     const auto& faces = detail::cube_faces();
     for (int f = 0; f < 6; ++f) {
@@ -186,16 +211,15 @@ class Extractor {
   }
 
   /// Ids of plane k's nodes in key order (j, i, axis) into `ids`; writes the nodes when `write`.
-  void plane_nodes(std::int64_t k, const std::uint8_t* s, const std::uint8_t* up,
-                   std::int64_t base, bool write, std::uint32_t* ids, SurfelComplex& out) const {
+  void plane_nodes(std::int64_t k, const std::uint8_t* s, const std::uint8_t* up, std::int64_t base,
+                   bool write, std::uint32_t* ids, SurfelComplex& out) const {
     auto id = static_cast<std::uint32_t>(base);
     const std::int64_t plane_lin = k * plane_;
     auto emit = [&](std::int64_t p, std::int64_t i, std::int64_t j, int axis) {
       ids[3 * p + axis] = id;
       if (write) {
         const std::int64_t lin0 = plane_lin + p;
-        const std::int64_t lin1 =
-            lin0 + (axis == 0 ? 1 : (axis == 1 ? nx_ : plane_));
+        const std::int64_t lin1 = lin0 + (axis == 0 ? 1 : (axis == 1 ? nx_ : plane_));
         const double v0 = value(lin0), v1 = value(lin1);
         double t = v0 / (v0 - v1);
         if (!(t == t)) t = 0.5;  // NaN samples: deterministic midpoint
@@ -216,6 +240,17 @@ class Extractor {
       const std::uint8_t* b = j + 1 < ny_ ? a + nx_ : a;  // no y edges on the last row
       const std::uint8_t* c = up ? up + row : a;          // no z edges on the last plane
       for (std::int64_t i = 0; i < nx_; ++i) {
+        if (i + 9 <= nx_) {  // eight points whose x edges all lie in the row
+          std::uint64_t wa, wa1, wb, wc;
+          std::memcpy(&wa, a + i, 8);
+          std::memcpy(&wa1, a + i + 1, 8);
+          std::memcpy(&wb, b + i, 8);
+          std::memcpy(&wc, c + i, 8);
+          if (((wa ^ wa1) | (wa ^ wb) | (wa ^ wc)) == 0) {
+            i += 7;
+            continue;
+          }
+        }
         const std::uint8_t si = a[i];
         const bool ex = i + 1 < nx_ && si != a[i + 1];
         const bool ey = si != b[i];
@@ -234,26 +269,23 @@ class Extractor {
     auto s = static_cast<std::int32_t>(surfel_base);
     auto entry = static_cast<std::uint32_t>(entry_base);
     const std::uint32_t* maps[2] = {m0, m1};
-    for (std::int64_t j = 0; j + 1 < ny_; ++j)
-      for (std::int64_t i = 0; i + 1 < nx_; ++i) {
-        const std::int64_t p = j * nx_ + i;
-        const int c = q0[p] | (q1[p] << 4);
-        if (c == 0 || c == 255) continue;
-        const CellConfig& cfg = detail::cell_config(c, decisions(c, i, j, k), mirrored_);
-        const auto voxel = static_cast<std::uint64_t>(k * plane_ + p);
-        int idx = 0;
-        for (int cy = 0; cy < cfg.num_cycles; ++cy, ++s) {
-          out.surfel_offset[s] = entry;
-          out.surfel_voxel[s] = voxel;
-          for (int n = 0; n < cfg.cycle_len[cy]; ++n, ++idx, ++entry) {
-            const int e = cfg.edge[idx];
-            const std::uint32_t node = maps[edge_plane_[e]][3 * p + edge_offset_[e]];
-            out.surfel_nodes[entry] = node;
-            out.surfel_opposite[entry] = cfg.opposite_quadrant[idx];  // resolved in link pass
-            out.node_fan[node][edge_slot_[e]] = s;
-          }
+    for_active_voxels(q0, q1, [&](std::int64_t i, std::int64_t j, int c) {
+      const std::int64_t p = j * nx_ + i;
+      const CellConfig& cfg = table_.config(c, decisions(c, i, j, k), mirrored_);
+      const auto voxel = static_cast<std::uint64_t>(k * plane_ + p);
+      int idx = 0;
+      for (int cy = 0; cy < cfg.num_cycles; ++cy, ++s) {
+        out.surfel_offset[s] = entry;
+        out.surfel_voxel[s] = voxel;
+        for (int n = 0; n < cfg.cycle_len[cy]; ++n, ++idx, ++entry) {
+          const int e = cfg.edge[idx];
+          const std::uint32_t node = maps[edge_plane_[e]][3 * p + edge_offset_[e]];
+          out.surfel_nodes[entry] = node;
+          out.surfel_opposite[entry] = cfg.opposite_quadrant[idx];  // resolved in link pass
+          out.node_fan[node][edge_slot_[e]] = s;
         }
       }
+    });
   }
 
   const T* data_;
@@ -262,6 +294,7 @@ class Extractor {
   Vec3 origin_;
   Mat3 to_world_;
   bool mirrored_;
+  const detail::CellTable& table_;
   std::int64_t edge_offset_[12];
   int edge_plane_[12];
   int edge_slot_[12];
@@ -278,7 +311,8 @@ void extract(const Volume& volume, SurfelComplex& out, int threads) {
   const Extractor<T> ex(volume, out.iso, out.inside_sign);
   const std::int64_t nz = ex.nz();
   // Slabs: a few per thread for balance; each costs one or two extra plane classifications.
-  const std::int64_t nslabs = std::clamp<std::int64_t>(4 * threads, 1, std::max<std::int64_t>(nz / 4, 1));
+  const std::int64_t nslabs =
+      std::clamp<std::int64_t>(4 * threads, 1, std::max<std::int64_t>(nz / 4, 1));
   auto slab = [&](std::int64_t s) { return std::pair{nz * s / nslabs, nz * (s + 1) / nslabs}; };
 
   Counts counts;
@@ -304,14 +338,18 @@ void extract(const Volume& volume, SurfelComplex& out, int threads) {
   check_id_range(num_surfels, std::numeric_limits<std::int32_t>::max() - 1, "surfels");
   check_id_range(num_entries, std::numeric_limits<std::uint32_t>::max() - 1, "polygon entries");
 
-  out.node_key.resize(num_nodes);
-  out.node_pos.resize(3 * num_nodes);
-  out.node_fan.assign(num_nodes, {-1, -1, -1, -1});
-  out.surfel_offset.resize(num_surfels + 1);
-  out.surfel_nodes.resize(num_entries);
-  out.surfel_opposite.resize(num_entries);
-  out.surfel_voxel.resize(num_surfels);
-  out.cvertex.resize(3 * num_surfels);
+  // First touch of the large arrays costs more than the passes themselves: fault them in
+  // concurrently, with transparent huge pages where the kernel allows.
+  tbb::parallel_invoke([&] { detail::sized(out.node_key, num_nodes); },
+                       [&] { detail::sized(out.node_pos, 3 * num_nodes); },
+                       [&] {
+                         detail::sized(out.node_fan, num_nodes, {-1, -1, -1, -1});
+                       },
+                       [&] { detail::sized(out.surfel_offset, num_surfels + 1); },
+                       [&] { detail::sized(out.surfel_nodes, num_entries); },
+                       [&] { detail::sized(out.surfel_opposite, num_entries); },
+                       [&] { detail::sized(out.surfel_voxel, num_surfels); },
+                       [&] { detail::sized(out.cvertex, 3 * num_surfels); });
   out.surfel_offset[num_surfels] = static_cast<std::uint32_t>(num_entries);
 
   tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, nslabs, 1), [&](const auto& r) {
@@ -322,27 +360,27 @@ void extract(const Volume& volume, SurfelComplex& out, int threads) {
   });
 
   // Link pass: opposite surfels through the fans, c-vertices from the node positions.
-  tbb::parallel_for(
-      tbb::blocked_range<std::int64_t>(0, num_surfels, 4096), [&](const auto& r) {
-        for (std::int64_t s = r.begin(); s < r.end(); ++s) {
-          const std::uint32_t b = out.surfel_offset[s], e = out.surfel_offset[s + 1];
-          double sum[3] = {0, 0, 0};
-          for (std::uint32_t x = b; x < e; ++x) {
-            const std::uint32_t n = out.surfel_nodes[x];
-            out.surfel_opposite[x] = out.node_fan[n][out.surfel_opposite[x]];
-            for (int a = 0; a < 3; ++a) sum[a] += out.node_pos[3 * std::size_t{n} + a];
-          }
-          for (int a = 0; a < 3; ++a)
-            out.cvertex[3 * s + a] = static_cast<float>(sum[a] / static_cast<double>(e - b));
-        }
-      });
+  tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, num_surfels, 4096), [&](const auto& r) {
+    for (std::int64_t s = r.begin(); s < r.end(); ++s) {
+      const std::uint32_t b = out.surfel_offset[s], e = out.surfel_offset[s + 1];
+      double sum[3] = {0, 0, 0};
+      for (std::uint32_t x = b; x < e; ++x) {
+        const std::uint32_t n = out.surfel_nodes[x];
+        out.surfel_opposite[x] = out.node_fan[n][out.surfel_opposite[x]];
+        for (int a = 0; a < 3; ++a) sum[a] += out.node_pos[3 * std::size_t{n} + a];
+      }
+      for (int a = 0; a < 3; ++a)
+        out.cvertex[3 * s + a] = static_cast<float>(sum[a] / static_cast<double>(e - b));
+    }
+  });
 }
 
 }  // namespace
 
 SurfelComplex build_surfels(const Volume& volume, double iso, double inside_sign,
                             const SurfelOptions& options) {
-  if (!std::isfinite(iso)) fail(Status::invalid_input, "build_surfels: the iso-value must be finite");
+  if (!std::isfinite(iso))
+    fail(Status::invalid_input, "build_surfels: the iso-value must be finite");
   if (!(inside_sign == 1 || inside_sign == -1))
     fail(Status::invalid_input, "build_surfels: inside_sign must be +1 or -1");
   SurfelComplex out;
@@ -353,7 +391,8 @@ SurfelComplex build_surfels(const Volume& volume, double iso, double inside_sign
   const auto& d = volume.grid.dims;
   if (d[0] < 2 || d[1] < 2 || d[2] < 2) return out;  // no voxels, no surface
   if (!volume.data.data() ||
-      volume.data.size() < static_cast<std::size_t>(volume.grid.num_samples()) * scalar_size(volume.type))
+      volume.data.size() <
+          static_cast<std::size_t>(volume.grid.num_samples()) * scalar_size(volume.type))
     fail(Status::internal, "build_surfels: volume sample buffer smaller than its grid");
   const int threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
   tbb::task_arena arena(threads);

@@ -22,6 +22,7 @@
 
 #include <array>
 #include <cstdint>
+#include <vector>
 
 namespace adamesh::detail {
 
@@ -47,6 +48,14 @@ const std::array<CubeEdge, 12>& cube_edges() noexcept;
 const std::array<CubeFace, 6>& cube_faces() noexcept;
 /// Face shared by two different edges, or -1.
 int common_face(int e1, int e2) noexcept;
+/// May a polygon of this voxel use the diagonal between nodes on edges e1 and e2 (not joined by a
+/// segment)? Always when the edges share no face. Two nodes on one face (an ambiguous face has
+/// four nodes and two segments) could be joined by the neighbour across that face too, giving an
+/// edge of four triangles; the two voxels therefore split those four pairs: the voxel below the
+/// face (face side 1) may use the two diagonals crossing the face (nodes on opposite face edges),
+/// the voxel above it (side 0) the two pairs on adjacent face edges. Every configuration has a
+/// triangulation within these rules (tests/mc_test.cpp checks all of them).
+bool diagonal_allowed(int e1, int e2) noexcept;
 /// Quadrant (node_fan slot) of the voxel at integer offset `voxel` (relative to the reference
 /// voxel's lower corner) around the reference voxel's edge e. Precondition: that voxel touches e.
 int fan_quadrant(int e, const std::array<int, 3>& voxel) noexcept;
@@ -63,15 +72,48 @@ struct CellConfig {
   std::array<std::uint8_t, 12> opposite_quadrant{};
 };
 
-/// Bit f set when face f has alternating corner signs for this case.
-std::uint8_t ambiguous_faces(int cell_case) noexcept;
+/// All configurations, generated once (cell_table()).
+class CellTable {
+ public:
+  CellTable();
+  /// Bit f set when face f has alternating corner signs for this case.
+  std::uint8_t ambiguous(int cell_case) const noexcept { return ambiguous_[cell_case]; }
+  /// Number of sign-changing edges (= polygon entries) of a case, whatever the decisions.
+  std::uint8_t entries(int cell_case) const noexcept { return entries_[cell_case]; }
+  /// Configuration for `cell_case` with `decisions` (bit f set: on ambiguous face f the positive
+  /// diagonal is connected through the face, i.e. the saddle value is >= 0). Bits of unambiguous
+  /// faces are ignored. `mirrored`: the index-to-world map reverses orientation (negative
+  /// determinant); every cycle is then reversed so polygons stay counter-clockwise seen from the
+  /// negative side in world space.
+  const CellConfig& config(int cell_case, unsigned decisions, bool mirrored) const noexcept {
+    const unsigned m = ambiguous_[cell_case];
+    unsigned local = 0;
+    if (m) {
+      int b = 0;
+      for (int f = 0; f < 6; ++f)
+        if (m & (1u << f)) {
+          if (decisions & (1u << f)) local |= 1u << b;
+          ++b;
+        }
+    }
+    return configs_[mirrored][offset_[cell_case] + local];
+  }
 
-/// Configuration for `cell_case` with `decisions` (bit f set: on ambiguous face f the positive
-/// diagonal is connected through the face, i.e. the saddle value is >= 0). Bits of unambiguous
-/// faces are ignored. `mirrored`: the index-to-world map reverses orientation (negative
-/// determinant); every cycle is then reversed so polygons stay counter-clockwise seen from the
-/// negative side in world space.
-const CellConfig& cell_config(int cell_case, unsigned decisions, bool mirrored) noexcept;
+ private:
+  std::array<std::uint8_t, 256> ambiguous_{};
+  std::array<std::uint8_t, 256> entries_{};
+  std::array<std::uint32_t, 256> offset_{};
+  std::vector<CellConfig> configs_[2];  // [mirrored]
+};
+
+const CellTable& cell_table() noexcept;
+
+inline std::uint8_t ambiguous_faces(int cell_case) noexcept {
+  return cell_table().ambiguous(cell_case);
+}
+inline const CellConfig& cell_config(int cell_case, unsigned decisions, bool mirrored) noexcept {
+  return cell_table().config(cell_case, decisions, mirrored);
+}
 
 /// Asymptotic decider on one face with its four values (minus iso, times inside_sign) in cyclic
 /// order, signs alternating. Returns true when the positive diagonal is connected, i.e. the

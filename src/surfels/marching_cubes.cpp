@@ -8,9 +8,11 @@
 // Manifoldness: polygon edges are face segments, shared by exactly the two surfels across the
 // face (one on the volume border). A diagonal joins two nodes of one voxel; it could also be used
 // by the neighbour only if both nodes lie on their common face — which happens on ambiguous faces
-// (four nodes, two segments). Such diagonals are avoided first (lexicographic cost), which is
-// always possible (tests/mc_test.cpp enumerates every configuration), so no edge has more than
-// two triangles and no triangle is repeated.
+// (four nodes, two segments). Some cycles (116 of the 1026 configuration cycles, e.g. the 8- and
+// 9-node saddles) cannot avoid such a diagonal, so the two voxels of a face split the four
+// candidate pairs (detail::diagonal_allowed); the DP minimises the use of the other side's
+// pairs first (always zero, checked for every configuration by tests/mc_test.cpp), so no edge
+// has more than two triangles and no triangle is repeated.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -37,7 +39,7 @@ double min_angle_quality(const Vec3& a, const Vec3& b, const Vec3& c) {
 }
 
 struct Cost {
-  int bad = 0;         // diagonals between two nodes on one voxel face
+  int bad = 0;         // diagonals reserved for the voxel across a face
   double quality = 0;  // min over triangles of min_angle_quality
   bool better_than(const Cost& o) const {
     return bad != o.bad ? bad < o.bad : quality > o.quality;
@@ -55,7 +57,7 @@ class PolygonTriangulator {
     for (int i = 0; i < len; ++i)
       for (int j = i + 1; j < len; ++j) {
         const bool side = j == i + 1 || (i == 0 && j == len - 1);
-        bad_[i][j] = !side && detail::common_face(local_edge[i], local_edge[j]) >= 0;
+        bad_[i][j] = !side && !detail::diagonal_allowed(local_edge[i], local_edge[j]);
       }
     for (int i = 0; i + 1 < len; ++i) best_[i][i + 1] = Cost{0, 1e300};
     for (int gap = 2; gap < len; ++gap)
