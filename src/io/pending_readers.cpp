@@ -11,7 +11,6 @@ namespace {
 }
 }  // namespace
 
-Volume read_vti(const std::string& path) { pending(path, "VTK XML ImageData"); }
 Volume read_slc(const std::string& path) { pending(path, "VolVis SLC"); }
 Volume read_mrc(const std::string& path) { pending(path, "MRC"); }
 
