@@ -1,0 +1,117 @@
+// Error of a mesh against the iso-surface of a scalar field (docs/METRICS.md "Against a field",
+// ALGORITHM.md section 4):
+//   distance  each area-weighted sample point's (and vertex's) distance to the surface, measured
+//             as the length of its converged Newton projection (project_to_iso);
+//   ε_e       Σ_e D(mid e)² · Σ_{T∋e} A(T)/2  /  Σ_T A(T)   (border edges: A(T1)/2);
+//   ε_n       Σ_T A(T) (1 − n(T)·m(T)) / Σ_T A(T), n the unit triangle normal and m the unit
+//             outward field normal −inside_sign·∇f/|∇f| at the centroid.
+// A projection that does not converge falls back to |signed_distance| (capped at the larger of
+// the mesh's and the field domain's diagonals) and is counted in `unconverged`.
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+#include "adamesh/metrics.h"
+#include "metrics/adjacency.h"
+#include "metrics/mesh_check.h"
+#include "metrics/parallel.h"
+#include "metrics/sampling.h"
+
+namespace adamesh {
+
+FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double iso,
+                             const FieldErrorOptions& opt) {
+  detail::check_mesh(mesh);
+  return detail::with_threads(opt.threads, [&] {
+    FieldErrorReport r;
+    const std::size_t nt = mesh.num_triangles();
+    const std::uint32_t* tri = mesh.triangles.data();
+    r.diagonal = mesh.bounds().diagonal();
+    const double scale = std::max(r.diagonal, field.domain().diagonal());
+    ProjectOptions po;
+    po.max_steps = opt.max_steps;
+    po.tolerance = opt.tolerance > 0 ? opt.tolerance : 1e-9 * (r.diagonal > 0 ? r.diagonal : scale);
+    po.max_step = std::max(0.1 * scale, po.tolerance);
+    const double cap = scale > 0 ? scale : 1.0;
+
+    std::atomic<std::int64_t> unconverged{0};
+    auto dist = [&](const Vec3& p) {
+      const ProjectResult pr = project_to_iso(field, iso, p, po);
+      if (pr.converged) return distance(pr.point, p);
+      unconverged.fetch_add(1, std::memory_order_relaxed);
+      const double sd = std::abs(signed_distance(field, iso, p, cap));
+      return std::isfinite(sd) ? sd : cap;  // NaN field values: count as far away
+    };
+
+    // Distances of the sample points and vertices.
+    const std::uint64_t n = opt.samples > 0 ? static_cast<std::uint64_t>(opt.samples)
+                                            : static_cast<std::uint64_t>(default_sample_count(mesh));
+    const detail::SampleLayout layout = detail::layout_samples(mesh, n);
+    std::vector<double> d(layout.count());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 256), [&](const auto& rg) {
+      for (std::size_t t = rg.begin(); t != rg.end(); ++t)
+        for (std::uint64_t g = layout.first[t]; g < layout.first[t + 1]; ++g)
+          d[g] = dist(detail::sample_point(mesh, t, g));
+    });
+    const std::vector<std::uint32_t> verts = detail::referenced_vertices(mesh);
+    const double vmax = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, verts.size(), 1024), 0.0,
+        [&](const auto& rg, double m) {
+          for (std::size_t i = rg.begin(); i != rg.end(); ++i) m = std::max(m, dist(mesh.vertex(verts[i])));
+          return m;
+        },
+        [](double a, double b) { return std::max(a, b); });
+    r.distance = detail::summarize_distances(d, vmax);
+    d = {};
+    r.distance_rel = r.distance;
+    if (r.diagonal > 0)
+      for (double* x : {&r.distance_rel.mean, &r.distance_rel.rms, &r.distance_rel.max, &r.distance_rel.p99})
+        *x /= r.diagonal;
+
+    // Triangle areas and ε_n.
+    std::vector<double> area(nt);
+    std::atomic<std::int64_t> flat{0};
+    const double total_area = detail::chunked_sum(nt, [&](std::size_t t) {
+      const Vec3 a = mesh.vertex(tri[3 * t]), b = mesh.vertex(tri[3 * t + 1]), c = mesh.vertex(tri[3 * t + 2]);
+      area[t] = 0.5 * norm(cross(b - a, c - a));
+      return area[t];
+    });
+    const double normal_sum = detail::chunked_sum(nt, [&](std::size_t t) {
+      const Vec3 a = mesh.vertex(tri[3 * t]), b = mesh.vertex(tri[3 * t + 1]), c = mesh.vertex(tri[3 * t + 2]);
+      const Vec3 nrm = normalized(cross(b - a, c - a));
+      const Vec3 g = field.gradient((a + b + c) / 3.0);
+      const double gl = norm(g);
+      Vec3 m{};
+      if (gl > 0 && std::isfinite(gl)) m = (-opt.inside_sign / gl) * g;
+      else flat.fetch_add(1, std::memory_order_relaxed);
+      return area[t] * (1.0 - dot(nrm, m));
+    });
+
+    // ε_e over the edges of the proper triangles.
+    const detail::Adjacency adj = detail::build_adjacency(mesh);
+    const double edge_sum = detail::chunked_sum(adj.num_edges(), [&](std::size_t e) {
+      const std::uint32_t* es = adj.edge_sides.data() + adj.edge_offset[e];
+      const std::uint32_t s = es[0];
+      const Vec3 mid = 0.5 * (mesh.vertex(detail::side_from(mesh, s)) + mesh.vertex(detail::side_to(mesh, s)));
+      double w = 0;
+      for (std::uint32_t i = 0; i < adj.edge_valence(e); ++i) w += 0.5 * area[es[i] / 3];
+      if (w == 0) return 0.0;
+      const double dm = dist(mid);
+      return dm * dm * w;
+    });
+
+    if (total_area > 0) {
+      r.eps_e = edge_sum / total_area;
+      r.eps_n = normal_sum / total_area;
+    }
+    r.eps_e_sqrt_rel = r.diagonal > 0 ? std::sqrt(r.eps_e) / r.diagonal : 0;
+    r.unconverged = unconverged.load();
+    r.flat_gradient_triangles = flat.load();
+    return r;
+  });
+}
+
+}  // namespace adamesh
