@@ -16,6 +16,8 @@ namespace adamesh {
 Volume read_volume(const std::string& path, const RawOptions& raw = {});
 
 /// Name of the format read_volume() would use for `path` ("NRRD", "MetaImage", ...).
+/// Never throws: "" when neither the extension nor the file's magic is recognised (a file that
+/// cannot be opened is judged by its extension alone). See docs/FORMATS.md.
 std::string volume_format_for(const std::string& path, const RawOptions& raw = {});
 
 enum class MeshFormat { automatic, ply, obj, off, stl };

@@ -172,6 +172,8 @@ Volume read_vti(const std::string& path) {
   const auto ext = parse_ints(extent_text, 6, path, "WholeExtent");
   if (piece.attribute("Extent") && parse_ints(piece.attribute("Extent").value(), 6, path, "Extent") != ext)
     fail(Status::unsupported, path + ": the Piece Extent differs from the WholeExtent (partial pieces are not supported)");
+  for (auto e : ext)
+    if (e < -(std::int64_t(1) << 60) || e > (std::int64_t(1) << 60)) fail_input(path, "WholeExtent out of range");
   Grid grid;
   for (int a = 0; a < 3; ++a) grid.dims[a] = ext[2 * a + 1] - ext[2 * a] + 1;
   const auto origin = attr_doubles(path, image, "Origin", 3, {0, 0, 0});
