@@ -2,13 +2,21 @@
 // shapes, manifoldness and orientation on adversarial fields, determinism.
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <functional>
 #include <random>
+#include <sstream>
 
 #include "adamesh/input.h"
 #include "adamesh/io.h"
+#include "adamesh/metrics.h"
 #include "adamesh/surfels.h"
 #include "surfel_test_util.h"
 #include "testing.h"
@@ -319,4 +327,82 @@ TEST(MarchingCubesCli, UsageErrors) {
   EXPECT_EQ(run_cli("mc shape:sphere -o x.ply --threads -2").exit_code, 1);
   EXPECT_EQ(run_cli("mc -o x.ply").exit_code, 1);  // no INPUT
   EXPECT_EQ(run_cli("mc --help").exit_code, 0);
+}
+
+// ---- Every dataset of ../shared/data at each suggested iso-value (and the plain integer value
+// for integer data). With ADAMESH_MC_TABLE=FILE set, also writes docs/MC_TABLE.md's table there
+// (scripts/mc_table.sh). ----
+
+TEST(MarchingCubesData, EveryDatasetIsAManifoldAtEverySuggestedIso) {
+  ADAMESH_REQUIRE_SHARED_DATA(data);
+  std::ifstream in(data + "/manifest.json");
+  const nlohmann::json manifest = nlohmann::json::parse(in);
+  const char* table_path = std::getenv("ADAMESH_MC_TABLE");
+  const bool write_table = table_path != nullptr;
+  std::ostringstream table;
+  table << "| dataset | dims | iso | triangles | vertices | χ | components | boundary loops | "
+           "time (s) | M voxels/s | reference (skimage Lewiner): triangles, χ, components |\n"
+        << "|---|---|---|---|---|---|---|---|---|---|---|\n";
+  int runs = 0;
+  for (const auto& ds : manifest["datasets"]) {
+    const std::string id = ds["id"];
+    const Input input = load_input(data + "/" + ds["primary_file"].get<std::string>());
+    const Volume& vol = *input.volume;
+    std::vector<std::pair<double, const nlohmann::json*>> isos;
+    for (const auto& iv : ds["iso_values"]) {
+      isos.push_back({iv["value"].get<double>(), &iv});
+      // The integer value (samples equal to it count as inside); above the minimum, so that
+      // the surface is not empty (frog labels: 0.5 -> 1).
+      const double lo = ds["value_range"][0].get<double>();
+      const double integer = std::floor(iv["value"].get<double>());
+      if (!is_floating(vol.type)) isos.push_back({integer > lo ? integer : integer + 1, nullptr});
+    }
+    for (const auto& [iso, meta] : isos) {
+      SCOPED_TRACE(id + " iso " + std::to_string(iso));
+      // Time: best of three when writing the table (first runs pay thread start-up).
+      double secs = 1e30;
+      SurfelComplex cx;
+      Mesh m;
+      for (int rep = 0; rep < (write_table ? 3 : 1); ++rep) {
+        const auto t0 = std::chrono::steady_clock::now();
+        cx = build_surfels(vol, iso, input.inside_sign);
+        m = marching_cubes(cx);
+        secs = std::min(secs, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      }
+      const TopologyReport t = topology(m);
+      EXPECT_EQ(t.nonmanifold_edges, 0);
+      EXPECT_EQ(t.nonmanifold_vertices, 0);
+      EXPECT_EQ(t.degenerate_triangles, 0);
+      EXPECT_EQ(t.duplicate_triangles, 0);
+      EXPECT_EQ(t.collapsed_triangles, 0);
+      EXPECT_TRUE(t.oriented);
+      EXPECT_EQ(t.unreferenced_vertices, 0);
+      EXPECT_EQ(t.euler, cx.euler_characteristic());
+      EXPECT_EQ(t.boundary_edges, static_cast<std::int64_t>(cx.num_border_segments()));
+      EXPECT_GT(t.triangles, 0);
+      ++runs;
+      const auto& d = vol.grid.dims;
+      const double voxels = double(d[0] - 1) * double(d[1] - 1) * double(d[2] - 1);
+      char buf[512];
+      std::string ref = "—";
+      if (meta && meta->contains("reference_mesh")) {
+        const auto& r = (*meta)["reference_mesh"];
+        ref = std::to_string(r["triangles"].get<std::int64_t>()) + ", " +
+              std::to_string(r["euler"].get<std::int64_t>()) + ", " +
+              std::to_string(r["components"].get<std::int64_t>());
+      }
+      std::snprintf(buf, sizeof buf, "| %s | %lldx%lldx%lld | %g%s | %lld | %lld | %lld | %lld | %lld | %.3f | %.0f | %s |\n",
+                    id.c_str(), (long long)d[0], (long long)d[1], (long long)d[2], iso,
+                    meta ? "" : " (integer)", (long long)t.triangles, (long long)t.vertices,
+                    (long long)t.euler, (long long)t.components, (long long)t.boundary_loops, secs,
+                    voxels / secs / 1e6, ref.c_str());
+      table << buf;
+    }
+  }
+  EXPECT_GE(runs, 20);
+  if (write_table) {
+    std::ofstream o(table_path);
+    o << table.str();
+    ASSERT_TRUE(o.good()) << table_path;
+  }
 }

@@ -15,6 +15,7 @@ struct Command {
   int (*run)(const Argv& args);
 };
 
+int cmd_extract(const Argv& args);
 int cmd_mc(const Argv& args);
 int cmd_version(const Argv& args);
 

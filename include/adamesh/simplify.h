@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,8 @@ struct SimplifyOptions {
   /// Move base vertices onto the iso-surface with safeguarded Newton steps (needs a field).
   bool project_vertices = true;
   int max_rounds = 64;                  ///< violated-cell repair rounds before falling back
+  /// Optional progress report: stage name ("disk cover", "voronoi", "dual") and fraction done.
+  std::function<void(const char* stage, double fraction)> progress;
 };
 
 /// What the debug validator found (ALGORITHM.md section 4, "Covering").
@@ -63,6 +66,8 @@ struct SimplifyStats {
   std::size_t components = 0;           ///< components of G (kept)
   std::size_t dropped_components = 0;   ///< below min_component_surfels
   std::size_t fallback_components = 0;  ///< meshed from their surfels
+  std::size_t cone_cells = 0;           ///< cells triangulated as cones (local fallback)
+  std::size_t split_cells = 0;          ///< non-disk cells split into one cell per surfel
   std::vector<std::size_t> violations_by_kind = std::vector<std::size_t>(7, 0);
   double time_disk_cover_s = 0, time_voronoi_s = 0, time_dual_s = 0;
   CoveringValidation validation;
@@ -73,8 +78,12 @@ struct SimplifyStats {
 struct Covering {
   static constexpr std::uint32_t kNoCell = 0xffffffffu;
   std::vector<std::uint32_t> centre;      ///< per cell: its centre c-vertex
-  std::vector<float> radius;              ///< per cell: its disk radius (world)
+  std::vector<double> radius;             ///< per cell: its disk radius (world)
   std::vector<std::uint32_t> cell;        ///< per c-vertex: its cell, or kNoCell (dropped/fallback)
+  /// Per cell: 1 = triangulate as a cone over its boundary nodes (a cell whose Voronoi
+  /// violations survived at r_min; cells that were not even disks are split into one cell per
+  /// surfel first).
+  std::vector<std::uint8_t> cone;
   std::vector<std::uint8_t> fallback;     ///< per component of G: 1 = mesh it from its surfels
   std::vector<std::uint8_t> dropped;      ///< per component of G: 1 = dropped as noise
 };

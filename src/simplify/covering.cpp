@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <numeric>
 
 #include "adamesh/simplify.h"
@@ -66,6 +67,7 @@ Covering build_covering(const SurfelComplex& sc, const ConnectivityGraph& g,
   stats.r_max = r_max;
 
   DiskCover cover(sc, g, active, r_max, r_min, stats);
+  if (opt.progress) cover.on_progress = [&](double f) { opt.progress("disk cover", f); };
   cover.seed();
   cover.run();
   stats.time_disk_cover_s += seconds_since(t0);
@@ -86,57 +88,59 @@ Covering build_covering(const SurfelComplex& sc, const ConnectivityGraph& g,
     centre_of_cell.resize(cover.num_disks());
     for (std::uint32_t d = 0; d < cover.num_disks(); ++d) centre_of_cell[d] = cover.centre(d);
   };
-  std::vector<std::uint32_t> comp_vertices_offset(g.num_components + 1, 0);
-  std::vector<std::uint32_t> comp_vertices(n);
-  {
-    for (std::size_t v = 0; v < n; ++v) ++comp_vertices_offset[g.component[v] + 1];
-    std::partial_sum(comp_vertices_offset.begin(), comp_vertices_offset.end(),
-                     comp_vertices_offset.begin());
-    std::vector<std::uint32_t> fill(comp_vertices_offset.begin(), comp_vertices_offset.end() - 1);
-    for (std::uint32_t v = 0; v < n; ++v) comp_vertices[fill[g.component[v]]++] = v;
-  }
-  auto fall_back = [&](std::uint32_t comp) {
-    if (cov.fallback[comp]) return;
-    cov.fallback[comp] = 1;
-    ++stats.fallback_components;
-    std::vector<std::uint32_t> verts(comp_vertices.begin() + comp_vertices_offset[comp],
-                                     comp_vertices.begin() + comp_vertices_offset[comp + 1]);
-    cover.deactivate(verts);
-    vor.remove_vertices(verts);
-  };
-
   std::vector<std::uint32_t> nbrs;
   std::vector<std::array<std::uint32_t, 3>> triangles;
   std::vector<std::uint32_t> recheck;
+  // Cells whose violations could not be repaired (their component made no progress): they are
+  // meshed as cones (or split into single surfels) by the hybrid triangulation.
+  std::map<std::uint32_t, int> stuck;
   std::size_t round = 0;
-  for (;; ++round) {
-    std::vector<std::uint32_t> violated;
-    auto to_check = vor.take_touched();
-    to_check.insert(to_check.end(), recheck.begin(), recheck.end());
-    std::sort(to_check.begin(), to_check.end());
-    to_check.erase(std::unique(to_check.begin(), to_check.end()), to_check.end());
-    for (auto c : to_check) {
-      if (!vor.cell_alive(c)) continue;
-      const int kind = vor.check_cell(c, nbrs);
-      if (kind != kOk) {
-        violated.push_back(c);
-        ++stats.violations_by_kind[kind];
+  auto check_all = [&](const std::vector<std::uint32_t>& cells, std::vector<std::uint32_t>& bad,
+                       std::map<std::uint32_t, int>& kinds) {
+    for (auto c : cells) {
+      if (!vor.cell_alive(c)) {
+        stuck.erase(c);
+        continue;
       }
+      const int kind = vor.check_cell(c, nbrs);
+      if (kind == kOk) {
+        stuck.erase(c);
+        continue;
+      }
+      bad.push_back(c);
+      kinds[c] = kind;
+      ++stats.violations_by_kind[kind];
     }
     refresh_centres();
     std::vector<std::uint32_t> global_bad;
     dual_triangles(sc, vor.cells(), centre_of_cell, triangles, global_bad,
                    &stats.violations_by_kind);
-    violated.insert(violated.end(), global_bad.begin(), global_bad.end());
-    std::sort(violated.begin(), violated.end());
-    violated.erase(std::unique(violated.begin(), violated.end()), violated.end());
+    for (auto c : global_bad) {
+      bad.push_back(c);
+      if (!kinds.count(c)) kinds[c] = kFanPinch;
+    }
+    std::sort(bad.begin(), bad.end());
+    bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
+  };
+  for (;; ++round) {
+    std::vector<std::uint32_t> bad;
+    std::map<std::uint32_t, int> kinds;
+    auto to_check = vor.take_touched();
+    to_check.insert(to_check.end(), recheck.begin(), recheck.end());
+    std::sort(to_check.begin(), to_check.end());
+    to_check.erase(std::unique(to_check.begin(), to_check.end()), to_check.end());
+    check_all(to_check, bad, kinds);
+    std::vector<std::uint32_t> violated;
+    for (auto c : bad) {
+      if (stuck.count(c)) stuck[c] = kinds[c];
+      else violated.push_back(c);
+    }
     if (violated.empty()) break;
     stats.violated_cells_repaired += violated.size();
-
     if (round >= static_cast<std::size_t>(opt.max_rounds)) {
-      for (auto c : violated) fall_back(g.component[cover.centre(c)]);
+      for (auto c : violated) stuck[c] = kinds[c];
       stats.warnings.push_back("violated cells left after " + std::to_string(round) +
-                               " repair rounds: their components were meshed from surfels");
+                               " repair rounds are meshed as cones");
       break;
     }
     // Halve the disks of the violated cells and of their neighbour cells.
@@ -160,34 +164,58 @@ Covering build_covering(const SurfelComplex& sc, const ConnectivityGraph& g,
       vor.add_cells(cells);
     }
     stats.regularized += vor.regularize();
-    for (auto c : violated) {
-      const auto comp = g.component[cover.centre(c)];
-      if (!progress[comp] && !cov.fallback[comp]) {
-        fall_back(comp);
-        stats.warnings.push_back("component " + std::to_string(comp) +
-                                 ": violated cells persist at r_min; meshed from its surfels");
-      }
-    }
-    // Violated cells are checked again next round even if nothing reached them.
+    // Violated cells are checked again next round even if nothing reached them; those of a
+    // component that made no progress are stuck at r_min.
     recheck.clear();
-    for (auto c : violated)
-      if (!cov.fallback[g.component[cover.centre(c)]]) recheck.push_back(c);
+    for (auto c : violated) {
+      recheck.push_back(c);
+      if (!progress[g.component[cover.centre(c)]]) stuck[c] = kinds[c];
+    }
+  }
+  // Final word on the stuck cells (repairs nearby may have fixed some).
+  {
+    std::vector<std::uint32_t> cells, bad;
+    for (const auto& [c, k] : stuck) cells.push_back(c);
+    std::map<std::uint32_t, int> kinds;
+    check_all(cells, bad, kinds);
+    std::map<std::uint32_t, int> still;
+    for (auto c : bad) still[c] = kinds[c];
+    stuck.swap(still);
   }
   stats.repair_rounds = round;
   stats.time_voronoi_s += seconds_since(t1);
 
-  // Compact: keep the cells that own vertices, in disk order.
+  // Compact: keep the cells that own vertices, in disk order. Stuck cells become cones; those
+  // that are not even disks (pinched, disconnected, holed) are split into one cell per surfel.
   std::vector<std::uint32_t> remap(cover.num_disks(), Covering::kNoCell);
   for (std::uint32_t d = 0; d < cover.num_disks(); ++d) {
     if (!vor.cell_alive(d)) continue;
+    const auto it = stuck.find(d);
+    const bool split = it != stuck.end() && (it->second == kNotDisk || it->second == kFanPinch);
+    if (split) {
+      ++stats.split_cells;
+      continue;
+    }
     remap[d] = static_cast<std::uint32_t>(cov.centre.size());
     cov.centre.push_back(cover.centre(d));
-    cov.radius.push_back(static_cast<float>(cover.radius(d)));
+    cov.radius.push_back(cover.radius(d));
+    cov.cone.push_back(it != stuck.end() ? 1 : 0);
+    stats.cone_cells += it != stuck.end();
   }
   cov.cell.resize(n);
   for (std::size_t v = 0; v < n; ++v) {
     const auto c = vor.cell(static_cast<std::uint32_t>(v));
-    cov.cell[v] = c == Voronoi::kNone ? Covering::kNoCell : remap[c];
+    if (c == Voronoi::kNone) {
+      cov.cell[v] = Covering::kNoCell;
+    } else if (remap[c] == Covering::kNoCell) {  // split: the surfel is a cell of its own
+      cov.cell[v] = static_cast<std::uint32_t>(cov.centre.size());
+      cov.centre.push_back(static_cast<std::uint32_t>(v));
+      cov.radius.push_back(0.0);
+      cov.cone.push_back(1);
+      ++stats.cone_cells;
+    } else {
+      cov.cell[v] = remap[c];
+    }
   }
   stats.disks = cov.centre.size();
   return cov;

@@ -41,13 +41,16 @@ double DiskCover::radius_of(int level) const { return r_max_ / std::ldexp(1.0, l
 
 double DiskCover::rlo(std::uint32_t v) const {
   double r = kInf;
-  for_each_cover(v, [&](std::uint32_t d) { r = std::min(r, double(radius_[d])); });
+  for_each_cover(v, [&](std::uint32_t d) { r = std::min(r, radius_[d]); });
   return r;
 }
 
 void DiskCover::seed() {
-  for (std::uint32_t v = 0; v < g_.num_vertices(); ++v)
+  active_count_ = 0;
+  for (std::uint32_t v = 0; v < g_.num_vertices(); ++v) {
+    active_count_ += active_[v];
     if (active_[v] && !covered(v)) push(v);
+  }
 }
 
 void DiskCover::add_cover(std::uint32_t v, std::uint32_t d) {
@@ -59,6 +62,7 @@ void DiskCover::add_cover(std::uint32_t v, std::uint32_t d) {
     l = static_cast<std::uint32_t>(links_.size());
     links_.push_back({});
   }
+  if (head_[v] == kNil) ++covered_count_;
   links_[l] = {d, head_[v]};
   head_[v] = l;
 }
@@ -70,6 +74,7 @@ void DiskCover::remove_cover(std::uint32_t v, std::uint32_t d) {
       *p = links_[l].next;
       links_[l].next = free_;
       free_ = l;
+      if (head_[v] == kNil) --covered_count_;
       return;
     }
   }
@@ -120,23 +125,23 @@ int fan_runs(const SurfelComplex& sc, std::uint32_t n, InDisk&& in) {
 
 }  // namespace
 
-DiskCover::Grown DiskCover::grow(std::uint32_t x, int level) {
-  ++stats_.disks_grown;
-  const double R = radius_of(level);
+double DiskCover::explore(std::uint32_t x, double R, int first, int last) {
   double centre_d = kInf;  // distance of the first other centre met (independence)
   caps_.clear();
-  valid_.assign(static_cast<std::size_t>(max_level_ - level + 1), 0);
+  valid_.assign(static_cast<std::size_t>(std::max(0, last - first + 1)), 0);
   // Topology of the growing set, tracked incrementally: χ = nodes − segments + surfels, and the
   // number of pinch nodes (fans holding disk surfels in two or more runs). The set is a
   // topological disk exactly when χ = 1 and there is no pinch.
   long chi = 0, pinches = 0;
   double last_d = -1;
   auto in_disk = [&](std::uint32_t w) { return ws_.settled(w); };
+  prefixes_.clear();
   auto record = [&](double from, double to) {  // the current prefix stands for radii [from, to)
     const bool ok = chi == 1 && pinches == 0;
-    for (int j = level; j <= max_level_; ++j) {
+    if (ok) prefixes_.push_back(from);
+    for (int j = first; j <= last; ++j) {
       const double r = radius_of(j);
-      if (r >= from && r < to) valid_[j - level] = ok;
+      if (r >= from && r < to) valid_[j - first] = ok;
     }
   };
   dijkstra(
@@ -169,9 +174,15 @@ DiskCover::Grown DiskCover::grow(std::uint32_t x, int level) {
       },
       [&](std::uint32_t w) { return active_[w] != 0; });
   if (last_d >= 0) record(last_d, centre_d);
+  return centre_d;
+}
 
+DiskCover::Grown DiskCover::grow(std::uint32_t x, int level) {
+  ++stats_.disks_grown;
+  const int last = std::max(level, max_level_);  // repair may ask for radii below r_min
+  const double centre_d = explore(x, radius_of(level), level, last);
   bool topology_blocked = false;
-  for (int j = level; j <= max_level_; ++j) {
+  for (int j = level; j <= last; ++j) {
     const double r = radius_of(j);
     if (!(r < centre_d)) continue;
     if (!valid_[j - level]) {
@@ -190,17 +201,30 @@ DiskCover::Grown DiskCover::grow(std::uint32_t x, int level) {
     }
   }
   if (topology_blocked) ++stats_.events;
-  // At r_min the constraints cannot all be met: sub-voxel topology or a grading conflict.
-  // Accept the disk made of the centre alone and let the Voronoi repair or the fallback
-  // resolve it.
+  // No r_max/2^j is feasible down to the floor (a feature thinner than the smallest disk, or a
+  // tiny component): take the largest ball below the floor radius that is a topological disk and
+  // meets independence and grading — at least the centre alone — and let the Voronoi repair
+  // resolve what remains.
   ++stats_.floor_conflicts;
-  return {0.0, max_level_};
+  const double floor_r = radius_of(last);
+  for (auto it = prefixes_.rbegin(); it != prefixes_.rend(); ++it) {
+    const double r = *it;
+    if (r > floor_r || !(r < centre_d)) continue;
+    bool ok = true;
+    for (const auto& [d, cap] : caps_)
+      if (d <= r && r > cap * (1 + 1e-9)) {
+        ok = false;
+        break;
+      }
+    if (ok) return {r, last};
+  }
+  return {0.0, last};
 }
 
 void DiskCover::accept(std::uint32_t x, const Grown& grown) {
   const auto id = static_cast<std::uint32_t>(centre_.size());
   centre_.push_back(x);
-  radius_.push_back(static_cast<float>(grown.radius));
+  radius_.push_back(grown.radius);
   level_.push_back(static_cast<std::int8_t>(grown.level));
   halving_queued_.push_back(0);
   centre_disk_[x] = static_cast<std::int32_t>(id);
@@ -233,15 +257,26 @@ void DiskCover::accept(std::uint32_t x, const Grown& grown) {
 }
 
 bool DiskCover::halve(std::uint32_t z) {
-  if (level_[z] >= max_level_ || radius_[z] <= 0) {
+  const int top = max_level_ + kRepairLevels;
+  if (level_[z] >= top || radius_[z] <= 0) {
     ++stats_.floor_conflicts;
     return false;
   }
   ++stats_.halvings;
   const double old_r = radius_[z];
-  level_[z] = static_cast<std::int8_t>(level_[z] + 1);
-  radius_[z] = static_cast<float>(radius_of(level_[z]));
-  const double r = radius_[z];
+  // The new radius: the largest r_max/2^j below the old one whose ball is still a topological
+  // disk (a prefix of a disk need not be one); the centre alone when none is.
+  explore(centre_[z], old_r, level_[z] + 1, top);
+  int level = top;
+  double r = 0;
+  for (int j = level_[z] + 1; j <= top; ++j)
+    if (valid_[j - level_[z] - 1]) {
+      level = j;
+      r = radius_of(j);
+      break;
+    }
+  level_[z] = static_cast<std::int8_t>(level);
+  radius_[z] = r;
   const double big = 2.0 * r * (1 + 1e-9);
   dijkstra(
       g_, ws_, centre_[z], old_r,
@@ -283,6 +318,8 @@ void DiskCover::run() {
     const Grown grown = grow(v, label_[v]);
     accept(v, grown);
     process_halvings();
+    if (on_progress && centre_.size() % 256 == 0 && active_count_ > 0)
+      on_progress(double(covered_count_) / double(active_count_));
   }
 }
 

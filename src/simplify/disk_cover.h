@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <queue>
 #include <vector>
 
@@ -45,6 +46,8 @@ bool keeps_disk(const SurfelComplex& sc, std::uint32_t u, InDisk&& in_disk) {
 class DiskCover {
  public:
   static constexpr std::uint32_t kNil = 0xffffffffu;
+  /// Voronoi repair may halve disks this many levels below the growth floor r_max/2^K.
+  static constexpr int kRepairLevels = 2;
 
   DiskCover(const SurfelComplex& sc, const ConnectivityGraph& g, std::vector<std::uint8_t> active,
             double r_max, double r_min, SimplifyStats& stats);
@@ -75,6 +78,9 @@ class DiskCover {
   /// Disks accepted since the last call.
   std::vector<std::uint32_t> take_new_disks();
   PathWorkspace& workspace() { return ws_; }
+  std::size_t covered_count() const { return covered_count_; }
+  /// Called every few hundred disks with the covered fraction of the active vertices.
+  std::function<void(double)> on_progress;
 
  private:
   struct Grown {
@@ -100,6 +106,11 @@ class DiskCover {
   double radius_of(int level) const;
   double rlo(std::uint32_t v) const;
   Grown grow(std::uint32_t x, int level);
+  /// Dijkstra from x to radius R tracking the topology of the growing ball: valid_[j − first]
+  /// tells whether the ball of radius r_max/2^j (first ≤ j ≤ last) is a topological disk; caps_
+  /// collects the grading limits of covered vertices. Returns the distance of the first other
+  /// centre met (infinity if none).
+  double explore(std::uint32_t x, double R, int first, int last);
   void accept(std::uint32_t x, const Grown& g);
   void push(std::uint32_t v) { heap_.push({label_[v], dnear_[v], v}); }
   void add_cover(std::uint32_t v, std::uint32_t d);
@@ -122,9 +133,10 @@ class DiskCover {
   };
   std::vector<Link> links_;
   std::uint32_t free_ = kNil;
+  std::size_t covered_count_ = 0, active_count_ = 0;
 
   std::vector<std::uint32_t> centre_;
-  std::vector<float> radius_;
+  std::vector<double> radius_;
   std::vector<std::int8_t> level_;
   std::vector<std::uint8_t> halving_queued_;
   std::vector<std::uint32_t> halving_;
@@ -134,6 +146,7 @@ class DiskCover {
   PathWorkspace ws_;
   std::vector<std::pair<double, double>> caps_;
   std::vector<std::uint8_t> valid_;
+  std::vector<double> prefixes_;  ///< radii (settled distances) whose ball is a topological disk
 };
 
 }  // namespace adamesh::detail

@@ -21,15 +21,15 @@ namespace adamesh {
 
 namespace {
 
-struct ComponentTopology {
+struct CompTopo {
   long chi = 0;
   long loops = 0;
   bool manifold = true;
 };
 
 /// χ and boundary loops of every component of the surfel complex.
-std::vector<ComponentTopology> complex_topology(const SurfelComplex& sc, const ConnectivityGraph& g) {
-  std::vector<ComponentTopology> t(g.num_components);
+std::vector<CompTopo> complex_topology(const SurfelComplex& sc, const ConnectivityGraph& g) {
+  std::vector<CompTopo> t(g.num_components);
   std::vector<long> nodes_c(g.num_components, 0), faces_c(g.num_components, 0),
       half_c(g.num_components, 0);
   for (std::size_t n = 0; n < sc.num_nodes(); ++n)
@@ -71,9 +71,9 @@ std::vector<ComponentTopology> complex_topology(const SurfelComplex& sc, const C
 }
 
 /// χ, boundary loops and manifoldness of every component of a mesh (components given per vertex).
-std::vector<ComponentTopology> mesh_topology(const Mesh& m, const std::vector<std::uint32_t>& comp,
+std::vector<CompTopo> mesh_topology(const Mesh& m, const std::vector<std::uint32_t>& comp,
                                              std::size_t num_components) {
-  std::vector<ComponentTopology> t(num_components);
+  std::vector<CompTopo> t(num_components);
   for (std::size_t v = 0; v < m.num_vertices(); ++v) t[comp[v]].chi += 1;
   struct HalfEdge {
     std::uint32_t a, b;
@@ -196,27 +196,38 @@ BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
   const Mat3 a = sc.grid.index_to_world_matrix();
 
   BaseMesh bm;
-  for (int attempt = 0; attempt < 3; ++attempt) {
+  if (cov.cone.size() != cov.centre.size()) cov.cone.assign(cov.centre.size(), 0);
+  auto fall_back = [&](std::uint32_t comp, const std::string& why) {
+    if (cov.fallback[comp]) return;
+    cov.fallback[comp] = 1;
+    ++stats.fallback_components;
+    stats.warnings.push_back("component " + std::to_string(comp) + ": " + why +
+                             "; meshed from its surfels");
+  };
+  for (int attempt = 0; attempt < 8; ++attempt) {
     bm = BaseMesh{};
-    std::vector<std::array<std::uint32_t, 3>> tris;
-    std::vector<std::uint32_t> bad;
-    dual_triangles(sc, cov.cell, cov.centre, tris, bad, nullptr);
-    for (auto c : bad) {
-      const auto comp = g.component[cov.centre[c]];
-      if (!cov.fallback[comp]) {
-        cov.fallback[comp] = 1;
-        ++stats.fallback_components;
-        stats.warnings.push_back("component " + std::to_string(comp) +
-                                 ": dual not valid; meshed from its surfels");
+    std::vector<std::uint32_t> cells = cov.cell;
+    for (std::size_t v = 0; v < cells.size(); ++v)
+      if (cells[v] != Covering::kNoCell && cov.fallback[g.component[v]]) cells[v] = Covering::kNoCell;
+    const HybridResult hr = hybrid_triangles(sc, cells, cov.centre, cov.cone);
+    if (!hr.problem_cells.empty()) {  // escalate: dual cell → cone, cone → component fallback
+      for (auto c : hr.problem_cells) {
+        if (!cov.cone[c]) {
+          cov.cone[c] = 1;
+          ++stats.cone_cells;
+        } else {
+          fall_back(g.component[cov.centre[c]], "cells are not disks at the smallest radius");
+        }
       }
+      continue;
     }
     // Cell vertices.
     const std::size_t ncell = cov.centre.size();
-    std::vector<std::uint32_t> vertex_of_cell(ncell, Covering::kNoCell);
+    std::vector<std::uint32_t> vertex_of(ncell + hr.kept_nodes.size(), Covering::kNoCell);
     std::vector<std::uint32_t> border_surfel(ncell, Covering::kNoCell);
     std::vector<double> border_d(ncell, kInf);
     for (std::uint32_t v = 0; v < g.num_vertices(); ++v) {
-      const auto c = cov.cell[v];
+      const auto c = cells[v];
       if (c == Covering::kNoCell || !g.border[v]) continue;
       const double d = distance(sc.cvertex_position(v), sc.cvertex_position(cov.centre[c]));
       if (d < border_d[c]) {
@@ -224,16 +235,20 @@ BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
         border_surfel[c] = v;
       }
     }
+    std::vector<std::uint8_t> used(ncell, 0);
+    for (const auto& t : hr.triangles)
+      for (auto x : t)
+        if (x < ncell) used[x] = 1;
     for (std::uint32_t c = 0; c < ncell; ++c) {
       const auto comp = g.component[cov.centre[c]];
-      if (cov.fallback[comp]) continue;
+      if (cov.fallback[comp] || !used[c]) continue;
       Vec3 p = sc.cvertex_position(cov.centre[c]);
       std::uint32_t anchor = cov.centre[c];
       ProjectOptions po;
       po.max_steps = 8;
       po.tolerance = 1e-4 * h;
       po.max_step = 0.5 * h;
-      const bool on_border = border_surfel[c] != Covering::kNoCell;
+      const bool on_border = border_surfel[c] != Covering::kNoCell && !cov.cone[c];
       if (on_border) {
         anchor = border_surfel[c];
         const auto nodes = sc.nodes_of(anchor);
@@ -253,15 +268,27 @@ BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
         const ProjectResult r = project_to_iso(*field, sc.iso, p, po);
         if (distance(r.point, p) < 2.0 * h) p = r.point;
       }
-      vertex_of_cell[c] = bm.mesh.add_vertex(p);
+      vertex_of[c] = bm.mesh.add_vertex(p);
       bm.anchor.push_back(anchor);
       bm.border.push_back(on_border ? 1 : 0);
       bm.component.push_back(comp);
     }
-    for (const auto& t : tris) {
-      if (cov.fallback[g.component[cov.centre[t[0]]]]) continue;
-      bm.mesh.add_triangle(vertex_of_cell[t[0]], vertex_of_cell[t[1]], vertex_of_cell[t[2]]);
+    // Kept nodes (cone cells' boundaries, unsplittable quads) are vertices too.
+    for (std::size_t i = 0; i < hr.kept_nodes.size(); ++i) {
+      const std::uint32_t n = hr.kept_nodes[i];
+      std::int32_t anchor = -1;
+      bool border = false;
+      for (auto f : sc.node_fan[n]) {
+        if (f < 0) border = true;
+        else if (anchor < 0) anchor = f;
+      }
+      vertex_of[ncell + i] = bm.mesh.add_vertex(sc.node_position(n));
+      bm.anchor.push_back(static_cast<std::uint32_t>(anchor));
+      bm.border.push_back(border ? 1 : 0);
+      bm.component.push_back(g.component[anchor]);
     }
+    for (const auto& t : hr.triangles)
+      bm.mesh.add_triangle(vertex_of[t[0]], vertex_of[t[1]], vertex_of[t[2]]);
     // Fallback components: fan every surfel polygon around its c-vertex.
     std::unordered_map<std::uint32_t, std::uint32_t> vertex_of_node;
     for (std::uint32_t s = 0; s < sc.num_surfels(); ++s) {
@@ -296,23 +323,35 @@ BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
       for (std::size_t i = 0; i < nodes.size(); ++i)
         bm.mesh.add_triangle(cv, node_vertex(nodes[i]), node_vertex(nodes[(i + 1) % nodes.size()]));
     }
-    // Check every component against the surfel complex.
+    // Check every component against the surfel complex; escalate the ones that disagree:
+    // first every cell of the component becomes a cone, then the component falls back.
     const auto got = mesh_topology(bm.mesh, bm.component, g.num_components);
+    std::vector<std::uint8_t> bad_comp(g.num_components, 0);
     bool redo = false;
     for (std::uint32_t c = 0; c < g.num_components; ++c) {
       if (cov.dropped[c] || cov.fallback[c]) continue;
       if (got[c].chi != reference[c].chi || got[c].loops != reference[c].loops ||
-          !got[c].manifold) {
-        cov.fallback[c] = 1;
-        ++stats.fallback_components;
-        stats.warnings.push_back("component " + std::to_string(c) + ": base mesh χ=" +
-                                 std::to_string(got[c].chi) + " loops=" +
-                                 std::to_string(got[c].loops) + " differs from the surfels (χ=" +
-                                 std::to_string(reference[c].chi) + " loops=" +
-                                 std::to_string(reference[c].loops) + "); meshed from its surfels");
-        redo = true;
+          !got[c].manifold)
+        bad_comp[c] = 1;
+    }
+    std::vector<std::uint8_t> all_cone(g.num_components, 1);
+    for (std::uint32_t c = 0; c < ncell; ++c)
+      if (!cov.cone[c]) all_cone[g.component[cov.centre[c]]] = 0;
+    for (std::uint32_t c = 0; c < g.num_components; ++c) {
+      if (!bad_comp[c]) continue;
+      redo = true;
+      if (all_cone[c]) {
+        fall_back(c, "base mesh χ=" + std::to_string(got[c].chi) + " loops=" +
+                         std::to_string(got[c].loops) + " differs from the surfels (χ=" +
+                         std::to_string(reference[c].chi) + " loops=" +
+                         std::to_string(reference[c].loops) + ")");
       }
     }
+    for (std::uint32_t cell = 0; cell < ncell; ++cell)
+      if (bad_comp[g.component[cov.centre[cell]]] && !cov.cone[cell]) {
+        cov.cone[cell] = 1;
+        ++stats.cone_cells;
+      }
     if (!redo) break;
   }
   stats.time_dual_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

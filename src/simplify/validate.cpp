@@ -20,12 +20,17 @@ CoveringValidation validate_covering(const SurfelComplex& sc, const Connectivity
     const auto c = g.component[v];
     return !cov.dropped[c] && !cov.fallback[c];
   };
-  std::vector<float> rlo(n, 3e38f), rhi(n, 0.f);
-  std::vector<std::uint8_t> is_centre(n, 0);
-  for (auto x : cov.centre) is_centre[x] = 1;
+  std::vector<double> rlo(n, 1e300), rhi(n, 0.0);
+  std::vector<std::uint8_t> is_centre(n, 0), covered(n, 0);
+  auto singleton = [&](std::size_t c) { return !cov.cone.empty() && cov.cone[c] && cov.radius[c] == 0.0; };
+  for (std::size_t c = 0; c < cov.centre.size(); ++c) {
+    if (singleton(c)) covered[cov.centre[c]] = 1;  // split cells: not disks of the covering
+    else is_centre[cov.centre[c]] = 1;
+  }
   PathWorkspace ws(n);
   std::vector<std::uint32_t> members;
   for (std::size_t d = 0; d < cov.centre.size(); ++d) {
+    if (singleton(d)) continue;
     const std::uint32_t x = cov.centre[d];
     const double r = cov.radius[d];
     members.clear();
@@ -34,6 +39,7 @@ CoveringValidation validate_covering(const SurfelComplex& sc, const Connectivity
         [&](std::uint32_t v, double) {
           members.push_back(v);
           if (v != x && is_centre[v]) ++out.independence;
+          covered[v] = 1;
           rlo[v] = std::min(rlo[v], cov.radius[d]);
           rhi[v] = std::max(rhi[v], cov.radius[d]);
           return Visit::expand;
@@ -78,8 +84,8 @@ CoveringValidation validate_covering(const SurfelComplex& sc, const Connectivity
   }
   for (std::uint32_t v = 0; v < n; ++v) {
     if (!active(v)) continue;
-    if (rhi[v] == 0.f) ++out.uncovered;
-    else if (rhi[v] > 2.0f * rlo[v] * (1 + 1e-6f)) ++out.grading;
+    if (!covered[v]) ++out.uncovered;
+    else if (rhi[v] > 2.0 * rlo[v] * (1 + 1e-9)) ++out.grading;
   }
   // Violated cells: the closed-ball checks on the final assignment.
   Voronoi vor(sc, g);
@@ -88,12 +94,13 @@ CoveringValidation validate_covering(const SurfelComplex& sc, const Connectivity
     if (active(cov.centre[c])) cells.push_back({c, cov.centre[c]});
   vor.set_assignment(cov.cell, cov.centre);
   std::vector<std::uint32_t> nb;
+  auto is_cone = [&](std::uint32_t c) { return !cov.cone.empty() && cov.cone[c]; };
   for (const auto& [c, x] : cells)
-    if (vor.check_cell(c, nb) != kOk) ++out.violated_cells;
+    if (!is_cone(c) && vor.check_cell(c, nb) != kOk) ++out.violated_cells;
   std::vector<std::array<std::uint32_t, 3>> tris;
   std::vector<std::uint32_t> bad;
   dual_triangles(sc, vor.cells(), cov.centre, tris, bad, nullptr);
-  out.violated_cells += bad.size();
+  for (auto c : bad) out.violated_cells += !is_cone(c);
   return out;
 }
 

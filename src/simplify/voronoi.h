@@ -119,3 +119,20 @@ void dual_triangles(const SurfelComplex& sc, const std::vector<std::uint32_t>& c
                     std::vector<std::uint32_t>& violated, std::vector<std::size_t>* kinds);
 
 }  // namespace adamesh::detail
+
+namespace adamesh::detail {
+
+struct HybridResult {
+  /// Triangles over vertex ids: cell c → c, kept node kept_nodes[i] → num_cells + i.
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  std::vector<std::uint32_t> kept_nodes;
+  std::vector<std::uint32_t> problem_cells;  ///< cells whose links disagree with a neighbour's
+};
+
+/// Hybrid dual/cone triangulation (hybrid.cpp): the dual of the cells, except that cone cells
+/// are triangulated as cones over their boundary nodes (which then become vertices).
+HybridResult hybrid_triangles(const SurfelComplex& sc, const std::vector<std::uint32_t>& cell,
+                              const std::vector<std::uint32_t>& centre,
+                              const std::vector<std::uint8_t>& cone);
+
+}  // namespace adamesh::detail

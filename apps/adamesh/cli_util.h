@@ -1,0 +1,80 @@
+// Small helpers shared by the subcommands: stage timing, progress on stderr, peak memory.
+#pragma once
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <string>
+
+namespace adamesh::cli {
+
+/// Peak resident set size of this process in MiB.
+inline double peak_rss_mb() {
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  return static_cast<double>(ru.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
+}
+
+/// Prints "stage ... 12%" progress lines on stderr (one line per stage, updated in place on a
+/// terminal), unless quiet.
+class Progress {
+ public:
+  explicit Progress(bool quiet) : quiet_(quiet), tty_(isatty_stderr()) {}
+  ~Progress() {
+    if (!quiet_ && open_) std::fputc('\n', stderr);  // an error interrupted the stage
+  }
+  void stage(const char* name) {
+    if (quiet_) return;
+    finish();
+    current_ = name;
+    std::fprintf(stderr, "  %-12s", name);
+    std::fflush(stderr);
+    open_ = true;
+    last_pct_ = -1;
+    t0_ = std::chrono::steady_clock::now();
+  }
+  void fraction(double f) {
+    if (quiet_ || !open_) return;
+    const int pct = static_cast<int>(f * 100);
+    if (pct / 10 == last_pct_ / 10 && last_pct_ >= 0) return;
+    last_pct_ = pct;
+    if (tty_) std::fprintf(stderr, "\r  %-12s %3d%%", current_.c_str(), pct);
+    else std::fprintf(stderr, " %d%%", pct);
+    std::fflush(stderr);
+  }
+  void finish() {
+    if (quiet_ || !open_) return;
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+    std::fprintf(stderr, " done %.3f s\n", s);
+    open_ = false;
+  }
+
+ private:
+  static bool isatty_stderr();
+  bool quiet_, tty_;
+  bool open_ = false;
+  int last_pct_ = -1;
+  std::string current_;
+  std::chrono::steady_clock::time_point t0_;
+};
+
+inline bool Progress::isatty_stderr() { return isatty(2) != 0; }
+
+/// Wall-clock stopwatch in seconds.
+class Stopwatch {
+ public:
+  Stopwatch() : t0_(std::chrono::steady_clock::now()) {}
+  double lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double s = std::chrono::duration<double>(now - t0_).count();
+    t0_ = now;
+    return s;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point t0_;
+};
+
+}  // namespace adamesh::cli

@@ -1,0 +1,205 @@
+// `adamesh extract`: volume or implicit input → surfel complex → connectivity graph → disk and
+// Voronoi covering → base mesh (and, with the refinement stage, the adaptive hierarchy).
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "adamesh/atomic_file.h"
+#include "adamesh/error.h"
+#include "adamesh/graph.h"
+#include "adamesh/input.h"
+#include "adamesh/io.h"
+#include "adamesh/metrics.h"
+#include "adamesh/simplify.h"
+#include "adamesh/stats.h"
+#include "adamesh/surfels.h"
+#include "args.h"
+#include "cli_util.h"
+#include "commands.h"
+
+namespace adamesh::cli {
+
+namespace {
+
+std::vector<OptionSpec> extract_specs() {
+  std::vector<OptionSpec> s = {
+      {"--iso", true, "iso-value (default: the input's default, 0 for shape:/expr:)"},
+      {"--base", true, "write the base mesh M0 here (.ply .obj .off .stl)"},
+      {"--rmax", true, "largest disk radius, world units (default sqrt(area/1000))"},
+      {"--rmin", true, "smallest disk radius, world units (default 2 voxels)"},
+      {"--voxels", false, "--rmax/--rmin are in voxel edge lengths instead of world units"},
+      {"--min-component", true, "drop components with fewer surfels (default 0: keep all)"},
+      {"--threads", true, "worker threads (default: all cores); output does not depend on it"},
+      {"--report", true, "write a JSON report (sizes, topology, timings, peak memory)"},
+      {"--validate", false, "run the covering validator (slow) and add it to the report"},
+      {"--attributes", false, "write per-vertex border/component attributes (PLY)"},
+      {"--ascii", false, "ASCII PLY instead of binary"},
+      {"--quiet", false, "no progress or summary output"},
+  };
+  for (auto& o : input_option_specs()) s.push_back(o);
+  return s;
+}
+
+nlohmann::json topology_json(const TopologyReport& t) {
+  return {{"vertices", t.vertices},           {"triangles", t.triangles},
+          {"euler", t.euler},                 {"components", t.components},
+          {"boundary_loops", t.boundary_loops}, {"nonmanifold_edges", t.nonmanifold_edges},
+          {"oriented", t.oriented}};
+}
+
+}  // namespace
+
+int cmd_extract(const Argv& argv) {
+  const Args args("extract", argv, extract_specs());
+  if (args.help_requested()) {
+    std::cout << args.usage("INPUT [--iso V] --base base.ply [options]");
+    return 0;
+  }
+  args.expect_positionals(1, 1, "INPUT");
+  const std::string spec = args.positionals()[0];
+  const bool quiet = args.has("--quiet");
+  if (!args.has("--base") && !args.has("--report"))
+    fail(Status::usage, "adamesh extract: nothing to write: give --base FILE (and/or --report FILE)");
+
+  std::unique_ptr<tbb::global_control> threads;
+  int nthreads = 0;
+  if (auto t = args.get_int("--threads")) {
+    if (*t < 1 || *t > 1024) fail(Status::usage, "adamesh extract: --threads must be 1..1024");
+    nthreads = static_cast<int>(*t);
+    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                    static_cast<std::size_t>(*t));
+  }
+
+  Progress progress(quiet);
+  Stopwatch clock;
+  nlohmann::json timings;
+
+  progress.stage("read");
+  const Input in = load_input(spec, input_options_from(args));
+  double iso = 0;
+  if (auto v = args.get_double("--iso")) iso = *v;
+  else if (in.default_iso) iso = *in.default_iso;
+  else fail(Status::usage, "adamesh extract: " + spec + ": --iso is required for volume files");
+  if (!std::isfinite(iso)) fail(Status::usage, "adamesh extract: --iso must be finite");
+  {
+    const VolumeStats st = compute_stats(*in.volume);
+    if (!(iso > st.min && iso <= st.max) && !(iso >= st.min && iso < st.max))
+      fail_input(spec, "iso-value " + std::to_string(iso) + " is outside the value range [" +
+                           std::to_string(st.min) + ", " + std::to_string(st.max) +
+                           "]: the surface would be empty");
+  }
+  progress.finish();
+  timings["read"] = clock.lap();
+
+  progress.stage("surfels");
+  SurfelOptions so;
+  so.threads = nthreads;
+  const SurfelComplex sc = build_surfels(*in.volume, iso, in.inside_sign, so);
+  progress.finish();
+  timings["surfels"] = clock.lap();
+  if (sc.num_surfels() == 0) fail_input(spec, "no surface at iso-value " + std::to_string(iso));
+
+  progress.stage("graph");
+  const ConnectivityGraph g = build_graph(sc);
+  progress.finish();
+  timings["graph"] = clock.lap();
+
+  SimplifyOptions opt;
+  opt.threads = nthreads;
+  if (auto r = args.get_double("--rmax")) opt.r_max = *r;
+  if (auto r = args.get_double("--rmin")) opt.r_min = *r;
+  if (opt.r_max < 0 || opt.r_min < 0) fail(Status::usage, "adamesh extract: radii must be positive");
+  if (args.has("--voxels")) opt.unit = LengthUnit::voxels;
+  if (auto m = args.get_int("--min-component")) {
+    if (*m < 0) fail(Status::usage, "adamesh extract: --min-component must be >= 0");
+    opt.min_component_surfels = static_cast<std::size_t>(*m);
+  }
+  opt.progress = [&](const char*, double f) { progress.fraction(f); };
+
+  progress.stage("disk cover");
+  SimplifyStats stats;
+  const Covering cov = build_covering(sc, g, opt, stats);
+  progress.finish();
+  if (args.has("--validate")) stats.validation = validate_covering(sc, g, cov);
+  clock.lap();
+  timings["disk_cover"] = stats.time_disk_cover_s;
+  timings["voronoi"] = stats.time_voronoi_s;
+
+  progress.stage("dual");
+  BaseMesh base = build_base_mesh(sc, g, cov, in.field.get(), opt, std::move(stats));
+  progress.finish();
+  timings["dual"] = clock.lap();
+
+  progress.stage("write");
+  if (auto path = args.get("--base")) {
+    if (args.has("--attributes")) {
+      VertexAttribute border{"border", {}, {}}, comp{"component", {}, {}};
+      for (auto b : base.border) border.i32.push_back(b);
+      for (auto c : base.component) comp.i32.push_back(static_cast<std::int32_t>(c));
+      base.mesh.attributes.push_back(std::move(border));
+      base.mesh.attributes.push_back(std::move(comp));
+    }
+    MeshWriteOptions wo;
+    wo.ascii = args.has("--ascii");
+    write_mesh(base.mesh, *path, wo);
+  }
+  progress.finish();
+  timings["write"] = clock.lap();
+
+  const TopologyReport topo = topology(base.mesh);
+  const auto& st = base.stats;
+  if (auto path = args.get("--report")) {
+    nlohmann::json r;
+    r["input"] = spec;
+    r["iso"] = iso;
+    r["graph"] = {{"cvertices", g.num_vertices()}, {"edges", g.num_edges()},
+                  {"components", g.num_components}};
+    r["surfels"] = sc.num_surfels();
+    r["base"] = topology_json(topo);
+    r["base"]["quality"] = {{"q_mean", quality(base.mesh).q_mean}};
+    r["fallback_components"] = st.fallback_components;
+    r["dropped_components"] = st.dropped_components;
+    r["covering"] = {{"r_max", st.r_max},
+                     {"r_min", st.r_min},
+                     {"disks", st.disks},
+                     {"disks_grown", st.disks_grown},
+                     {"events", st.events},
+                     {"halvings", st.halvings},
+                     {"floor_conflicts", st.floor_conflicts},
+                     {"repair_rounds", st.repair_rounds},
+                     {"violated_cells_repaired", st.violated_cells_repaired},
+                     {"regularized", st.regularized},
+                     {"violations_by_kind", st.violations_by_kind}};
+    if (st.validation.ran)
+      r["validation"] = {{"ok", st.validation.ok()},
+                         {"uncovered", st.validation.uncovered},
+                         {"independence", st.validation.independence},
+                         {"grading", st.validation.grading},
+                         {"non_disks", st.validation.non_disks},
+                         {"violated_cells", st.validation.violated_cells}};
+    r["warnings"] = st.warnings;
+    r["timings_s"] = timings;
+    r["peak_rss_mb"] = peak_rss_mb();
+    write_file_atomically(
+        *path, [&](std::ostream& o) { o << std::setw(2) << r << "\n"; }, false);
+  }
+  if (!quiet) {
+    std::cout << "surfels " << sc.num_surfels() << " -> base mesh " << topo.vertices
+              << " vertices, " << topo.triangles << " triangles (χ " << topo.euler << ", "
+              << topo.components << " components, " << topo.boundary_loops
+              << " boundary loops)";
+    if (st.fallback_components)
+      std::cout << "; " << st.fallback_components << " components meshed from surfels";
+    std::cout << "\n";
+    for (const auto& w : st.warnings) std::cerr << "adamesh: warning: " << w << "\n";
+  }
+  return 0;
+}
+
+}  // namespace adamesh::cli
