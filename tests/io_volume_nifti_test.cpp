@@ -196,6 +196,10 @@ TEST(NiftiRead, Nifti2WithSform) {
   const Volume v = read_volume(path);
   EXPECT_EQ(v.format, "NIfTI-2");
   EXPECT_EQ(volume_format_for(path), "NIfTI-2");
+  const std::string gz = tmp.file("n2.nii.gz");
+  write_bytes(gz, gzip(bytes + to_bytes(values)));
+  EXPECT_EQ(volume_format_for(gz), "NIfTI-2");
+  expect_samples(read_volume(gz), values);
   expect_vec(v.grid.spacing, {0.5, 2.5, 1.5});
   expect_vec(v.grid.origin, {-1, 2, 7});
   expect_mat(v.grid.direction, Mat3::from_columns({1, 0, 0}, {0, 0, 1}, {0, -1, 0}));

@@ -124,6 +124,17 @@ std::string volume_format_for(const std::string& path, const RawOptions& raw) {
   const bool gz = ext.size() > 3 && ext.compare(ext.size() - 3, 3, ".gz") == 0;
   const Fmt sniffed = (gz || head.empty()) ? Fmt::unknown : sniff(head, &nifti2);
   if (f == Fmt::unknown) f = sniffed;
+  if (f == Fmt::nifti && gz && !head.empty()) {  // NIfTI-1 or -2: the first header word says
+    try {
+      const InputFile file(path);
+      detail::InflateReader r(file, 0, file.size(), detail::ZWrap::gzip);
+      std::string first(4, '\0');
+      r.read_exact(first.data(), 4, "header");
+      nifti2 = int32_at(first, 0, false) == 540 || int32_at(first, 0, true) == 540;
+    } catch (const Error&) {
+      // Corrupt stream: read_volume() will say so; the extension decides here.
+    }
+  }
   if (f == Fmt::nifti && nifti2) return "NIfTI-2";
   return format_name(f);
 }
