@@ -13,6 +13,7 @@ const std::vector<Command>& commands() {
   static const std::vector<Command> table = {
       {"extract", "extract the base mesh (and refined meshes) of an iso-surface", cmd_extract},
       {"mc", "marching cubes mesh of an iso-surface (reference, manifold)", cmd_mc},
+      {"stats", "topology, quality and error report of a mesh", cmd_stats},
       {"version", "print the version", cmd_version},
   };
   return table;

@@ -10,7 +10,7 @@ namespace adamesh {
 
 namespace {
 
-using nlohmann::json;
+using json = nlohmann::ordered_json;  // keys in the order written here
 
 json distance_json(const DistanceStats& d, const DistanceStats& rel) {
   return {{"mean", d.mean}, {"rms", d.rms}, {"max", d.max}, {"p99", d.p99},
