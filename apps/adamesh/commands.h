@@ -18,6 +18,7 @@ struct Command {
 int cmd_extract(const Argv& args);
 int cmd_mc(const Argv& args);
 int cmd_stats(const Argv& args);
+int cmd_info(const Argv& args);
 int cmd_version(const Argv& args);
 
 /// All registered commands (main.cpp).

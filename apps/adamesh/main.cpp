@@ -11,6 +11,7 @@ namespace adamesh::cli {
 
 const std::vector<Command>& commands() {
   static const std::vector<Command> table = {
+      {"info", "describe an input: grid, value statistics, suggested iso-value", cmd_info},
       {"extract", "extract the base mesh (and refined meshes) of an iso-surface", cmd_extract},
       {"mc", "marching cubes mesh of an iso-surface (reference, manifold)", cmd_mc},
       {"stats", "topology, quality and error report of a mesh", cmd_stats},
