@@ -1,0 +1,256 @@
+// Adaptation: placing the vertex a split creates (ALGORITHM.md 2.9).
+//
+// References: Peixoto & Velho (2002), geodesic midpoints on the connectivity graph; Ohtake,
+// Belyaev & Pasko, "Dynamic meshes for accurate polygonization of implicit surfaces with sharp
+// features" (2001) and Wood et al., "Semi-regular mesh extraction from volumes" (2000) for the
+// tangential smoothing F_T and the projection F_S.
+//
+// For an edge (p1, p2) with anchor c-vertices a1, a2:
+//   1. Start point. Interior edge: A* on G from a1 to a2 (Euclidean heuristic), the polyline
+//      p1, c(path[1]), …, c(path[k−1]), p2 and its point at half length. Edges shorter than
+//      geodesic_min_edge (4h) use the Euclidean midpoint (graph paths are quantised to the voxel
+//      there; ALGORITHM.md 5.2). Border edge: A* on the border-curve graph (border surfels joined
+//      through shared border nodes); the polyline p1, shared nodes…, p2 runs on the volume faces,
+//      and its half-length point is snapped onto the nearest face plane.
+//   2. F_T: p += τ (U − (U·n̂) n̂), U = mean(ring) − p, n̂ = ∇f/|∇f| (area-weighted normal of the
+//      new vertex's triangles when ∇f vanishes). Border: U = (p1+p2)/2 − p along the border
+//      tangent n_face × ∇f.
+//   3. F_S: project_to_iso (≤ 5 Newton steps, |T_S| < 1e-3 h, steps ≤ 0.5 h, bisection on sign
+//      change); border vertices inside their face plane, then snapped onto it exactly.
+//   4. Anchor: greedy walk on G (border: on the border graph) from the path's middle c-vertex to
+//      the c-vertex nearest the final position.
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "refine_internal.h"
+
+namespace adamesh::detail {
+
+namespace {
+
+/// Border segments of surfel s: (node a, node b) pairs.
+template <class F>
+void for_border_segments(const SurfelComplex& sc, std::uint32_t s, F&& f) {
+  const auto nodes = sc.nodes_of(s);
+  const auto opp = sc.opposites_of(s);
+  for (std::size_t e = 0; e < nodes.size(); ++e)
+    if (opp[e] < 0) f(nodes[e], nodes[(e + 1) % nodes.size()]);
+}
+
+ConnectivityGraph build_border_graph(const SurfelComplex& sc, const ConnectivityGraph& g) {
+  // (border node, surfel) pairs, grouped by node: surfels sharing a border node are adjacent.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> ns;
+  for (std::uint32_t s = 0; s < sc.num_surfels(); ++s) {
+    if (!g.border[s]) continue;
+    for_border_segments(sc, s, [&](std::uint32_t a, std::uint32_t b) {
+      ns.push_back({a, s});
+      ns.push_back({b, s});
+    });
+  }
+  std::sort(ns.begin(), ns.end());
+  ns.erase(std::unique(ns.begin(), ns.end()), ns.end());
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> adj;
+  for (std::size_t i = 0; i < ns.size();) {
+    std::size_t j = i + 1;
+    while (j < ns.size() && ns[j].first == ns[i].first) ++j;
+    for (std::size_t x = i; x < j; ++x)
+      for (std::size_t y = i; y < j; ++y)
+        if (ns[x].second != ns[y].second) adj.push_back({ns[x].second, ns[y].second});
+    i = j;
+  }
+  std::sort(adj.begin(), adj.end());
+  adj.erase(std::unique(adj.begin(), adj.end()), adj.end());
+  ConnectivityGraph bg;
+  const std::size_t n = sc.num_surfels();
+  bg.row.assign(n + 1, 0);
+  for (const auto& [a, b] : adj) ++bg.row[a + 1];
+  std::partial_sum(bg.row.begin(), bg.row.end(), bg.row.begin());
+  bg.col.reserve(adj.size());
+  bg.weight.reserve(adj.size());
+  for (const auto& [a, b] : adj) {
+    bg.col.push_back(b);
+    bg.weight.push_back(static_cast<float>(distance(sc.cvertex_position(a), sc.cvertex_position(b))));
+  }
+  bg.border = g.border;
+  bg.component = g.component;
+  bg.num_components = g.num_components;
+  return bg;
+}
+
+/// Point at `fraction` of the polyline's length; `seg` receives the segment index.
+Vec3 along(const std::vector<Vec3>& pts, double fraction, std::size_t& seg) {
+  double total = 0;
+  for (std::size_t i = 0; i + 1 < pts.size(); ++i) total += distance(pts[i], pts[i + 1]);
+  const double target = fraction * total;
+  double acc = 0;
+  for (std::size_t i = 0; i + 1 < pts.size(); ++i) {
+    const double l = distance(pts[i], pts[i + 1]);
+    if (acc + l >= target && l > 0) {
+      seg = i;
+      return pts[i] + ((target - acc) / l) * (pts[i + 1] - pts[i]);
+    }
+    acc += l;
+  }
+  seg = pts.size() >= 2 ? pts.size() - 2 : 0;
+  return pts.back();
+}
+
+/// The volume face nearest p (index space): snaps p onto it and returns its unit world normal.
+Vec3 snap_to_face(const Grid& grid, Vec3& p) {
+  Vec3 q = grid.to_index(p);
+  int best_axis = 0;
+  bool high = false;
+  double best = 1e300;
+  for (int a = 0; a < 3; ++a) {
+    const double top = static_cast<double>(grid.dims[a] - 1);
+    if (std::abs(q[a]) < best) best = std::abs(q[a]), best_axis = a, high = false;
+    if (std::abs(q[a] - top) < best) best = std::abs(q[a] - top), best_axis = a, high = true;
+  }
+  q[best_axis] = high ? static_cast<double>(grid.dims[best_axis] - 1) : 0.0;
+  p = grid.to_world(q);
+  const Mat3 m = grid.index_to_world_matrix();
+  return normalized(cross(m.column((best_axis + 1) % 3), m.column((best_axis + 2) % 3)));
+}
+
+/// Greedy descent on graph `g` towards p; returns the c-vertex where no neighbour is nearer.
+std::uint32_t greedy_walk(const ConnectivityGraph& g, const SurfelComplex& sc, std::uint32_t start,
+                          const Vec3& p) {
+  std::uint32_t cur = start;
+  double d = distance(sc.cvertex_position(cur), p);
+  for (int it = 0; it < 100000; ++it) {
+    std::uint32_t best = cur;
+    for (const std::uint32_t nb : g.neighbours(cur)) {
+      const double dn = distance(sc.cvertex_position(nb), p);
+      if (dn < d) d = dn, best = nb;
+    }
+    if (best == cur) break;
+    cur = best;
+  }
+  return cur;
+}
+
+/// Nearest border surfel of `a` along G (a itself when it is one).
+std::uint32_t border_anchor(const Surface& s, std::uint32_t a, PathWorkspace& ws) {
+  if (s.g.border[a]) return a;
+  std::uint32_t found = a;
+  dijkstra(s.g, ws, a, kInf, [&](std::uint32_t v, double) {
+    if (!s.g.border[v]) return Visit::expand;
+    found = v;
+    return Visit::stop;
+  });
+  return found;
+}
+
+/// A border node shared by the border segments of surfels x and y, or kNone.
+std::uint32_t shared_border_node(const SurfelComplex& sc, std::uint32_t x, std::uint32_t y) {
+  std::uint32_t found = 0xffffffffu;
+  for_border_segments(sc, x, [&](std::uint32_t a, std::uint32_t b) {
+    for_border_segments(sc, y, [&](std::uint32_t c, std::uint32_t d) {
+      if (found != 0xffffffffu) return;
+      if (a == c || a == d) found = a;
+      else if (b == c || b == d) found = b;
+    });
+  });
+  return found;
+}
+
+Vec3 ring_normal(const EdgeInput& in, const Vec3& p) {
+  Vec3 n{};
+  const int closed = in.ring_size == 4 ? 4 : in.ring_size - 1;
+  for (int i = 0; i < closed; ++i)
+    n += cross(in.ring[i] - p, in.ring[(i + 1) % in.ring_size] - p);
+  return normalized(n);
+}
+
+Placed place_border(const Surface& s, const EdgeInput& in, PathWorkspace& ws) {
+  const SurfelComplex& sc = s.sc;
+  Placed out;
+  out.kind = PlacementKind::border;
+  const std::uint32_t b1 = border_anchor(s, in.a1, ws), b2 = border_anchor(s, in.a2, ws);
+  double len = 0;
+  const auto path = astar(s.border_graph, sc, ws, b1, b2, len, [](std::uint32_t) { return true; });
+  std::vector<Vec3> pts{in.p1};
+  for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+    const std::uint32_t node = shared_border_node(sc, path[i], path[i + 1]);
+    if (node != 0xffffffffu) pts.push_back(sc.node_position(node));
+  }
+  pts.push_back(in.p2);
+  std::size_t seg = 0;
+  Vec3 p = along(pts, in.fraction, seg);
+  Vec3 face = snap_to_face(sc.grid, p);
+  // F_T along the border tangent.
+  if (in.ring_size > 0 && s.tau > 0) {
+    const Vec3 t = normalized(cross(face, s.field.gradient(p)));
+    const Vec3 u = 0.5 * (in.p1 + in.p2) - p;
+    p += s.tau * dot(u, t) * t;
+  }
+  ProjectOptions po;
+  po.max_steps = 5;
+  po.tolerance = 1e-3 * s.h;
+  po.max_step = 0.5 * s.h;
+  po.plane_normal = face;
+  const ProjectResult r = project_to_iso(s.field, s.iso, p, po);
+  p = r.point;
+  snap_to_face(sc.grid, p);
+  out.position = p;
+  out.converged = r.converged;
+  // Anchor: the border surfel nearest the result, walking the border graph from the path middle.
+  const std::uint32_t start = path.empty() ? b1 : path[std::min(path.size() - 1, seg)];
+  out.anchor = greedy_walk(s.border_graph, sc, start, p);
+  return out;
+}
+
+}  // namespace
+
+Surface::Surface(const SurfelComplex& sc_, const ConnectivityGraph& g_, const ScalarField& field_,
+                 const RefineOptions& options)
+    : sc(sc_), g(g_), field(field_), iso(sc_.iso), h(sc_.grid.min_spacing()), tau(options.tau),
+      geodesic_min_edge(options.geodesic_min_edge * sc_.grid.min_spacing()),
+      border_graph(build_border_graph(sc_, g_)) {}
+
+Placed place_vertex(const Surface& s, const EdgeInput& in, PathWorkspace& ws) {
+  if (in.border) return place_border(s, in, ws);
+  const SurfelComplex& sc = s.sc;
+  Placed out;
+  Vec3 p;
+  std::uint32_t mid_anchor = in.a1;
+  const double elen = distance(in.p1, in.p2);
+  bool geodesic = false;
+  if (elen >= s.geodesic_min_edge && in.a1 != in.a2) {
+    double len = 0;
+    const auto path = astar(s.g, sc, ws, in.a1, in.a2, len, [](std::uint32_t) { return true; });
+    if (path.size() >= 2) {
+      std::vector<Vec3> pts{in.p1};
+      for (std::size_t i = 1; i + 1 < path.size(); ++i) pts.push_back(sc.cvertex_position(path[i]));
+      pts.push_back(in.p2);
+      std::size_t seg = 0;
+      p = along(pts, in.fraction, seg);
+      mid_anchor = path[std::min(seg + 1, path.size() - 1)];
+      geodesic = true;
+    }
+  }
+  if (!geodesic) p = in.p1 + in.fraction * (in.p2 - in.p1);
+  out.kind = geodesic ? PlacementKind::geodesic : PlacementKind::euclidean;
+  // F_T: tangential part of the umbrella vector.
+  if (in.ring_size > 0 && s.tau > 0) {
+    Vec3 mean{};
+    for (int i = 0; i < in.ring_size; ++i) mean += in.ring[i];
+    const Vec3 u = mean / in.ring_size - p;
+    Vec3 n = s.field.gradient(p);
+    const double gn = norm(n);
+    n = gn > 0 && std::isfinite(gn) ? n / gn : ring_normal(in, p);
+    p += s.tau * (u - dot(u, n) * n);
+  }
+  ProjectOptions po;
+  po.max_steps = 5;
+  po.tolerance = 1e-3 * s.h;
+  po.max_step = 0.5 * s.h;
+  const ProjectResult r = project_to_iso(s.field, s.iso, p, po);
+  out.position = r.point;
+  out.converged = r.converged;
+  out.anchor = greedy_walk(s.g, sc, mid_anchor, out.position);
+  return out;
+}
+
+}  // namespace adamesh::detail

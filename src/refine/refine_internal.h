@@ -1,0 +1,84 @@
+// Internal interfaces of the refine module: the surface queries used to place new vertices
+// (adapt.cpp), the refinement criterion (criterion.cpp) and the block pairing (blocks.cpp).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "adamesh/field.h"
+#include "adamesh/graph.h"
+#include "adamesh/refine.h"
+#include "adamesh/surfels.h"
+#include "graph/shortest_paths.h"
+
+namespace adamesh::detail {
+
+/// Everything vertex placement needs, built once per refinement.
+struct Surface {
+  const SurfelComplex& sc;
+  const ConnectivityGraph& g;
+  const ScalarField& field;
+  double iso = 0;
+  double h = 1;                  ///< smallest voxel edge
+  double tau = 0.3;
+  double geodesic_min_edge = 0;  ///< world units: shorter edges use the Euclidean midpoint
+  /// Border curve graph: border surfels adjacent when they share a border node (an endpoint of
+  /// their border segments). Same vertex numbering as g; other surfels have no edges.
+  ConnectivityGraph border_graph;
+
+  Surface(const SurfelComplex& sc, const ConnectivityGraph& g, const ScalarField& field,
+          const RefineOptions& options);
+};
+
+/// A new vertex on the edge (p1, p2): ring = its neighbours at creation in counter-clockwise
+/// order (4, closed) or, on the border, the open fan [p2, v0, p1] (3).
+struct EdgeInput {
+  Vec3 p1, p2;
+  std::uint32_t a1 = 0, a2 = 0;  ///< anchor c-vertices of the endpoints
+  bool border = false;           ///< the edge lies on the volume border
+  std::array<Vec3, 4> ring{};
+  int ring_size = 0;             ///< 0: no smoothing
+  double fraction = 0.5;         ///< position along the geodesic (0.5: midpoint)
+};
+
+enum class PlacementKind : std::uint8_t { geodesic, euclidean, border };
+
+struct Placed {
+  Vec3 position;
+  std::uint32_t anchor = 0;
+  PlacementKind kind = PlacementKind::geodesic;
+  bool converged = true;  ///< |T_S| < 1e-3 h after the projection
+};
+
+/// Places a new vertex (ALGORITHM.md 2.9): geodesic point on G (border: on the border curve),
+/// tangential smoothing F_T, projection F_S, new anchor by a greedy walk. Deterministic; safe to
+/// call concurrently with distinct workspaces.
+Placed place_vertex(const Surface& s, const EdgeInput& in, PathWorkspace& ws);
+
+/// Sampled signed distances of a triangle (15 barycentric points, 4 subdivisions).
+struct TriError {
+  float sqrt_var = 0;  ///< sqrt(V_T), V_T = A(d²) − A(d)²
+  float max_abs = 0;   ///< max |d_k|
+};
+TriError evaluate_triangle(const ScalarField& f, double iso, const Vec3& a, const Vec3& b,
+                           const Vec3& c);
+
+/// Block pairing of a base mesh (ALGORITHM.md 2.7).
+struct Blocks {
+  std::vector<std::array<std::uint32_t, 3>> labelled;  ///< (v0, v1, v2), (v1, v2) the diagonal
+  bool perfect = false;
+  std::size_t greedy_pairs = 0, augmentations = 0, blocks = 0, border_half_blocks = 0;
+};
+Blocks match_blocks(const std::vector<Vec3>& positions,
+                    const std::vector<std::array<std::uint32_t, 3>>& triangles);
+
+/// Fallback blocks: every base triangle becomes three quads (corner, edge midpoints, centroid;
+/// new vertices placed on the surface), each quad a block of two triangles. Appends the new
+/// vertices to positions / anchors / border and returns the labelled triangles.
+std::vector<std::array<std::uint32_t, 3>> quad_blocks(
+    const Surface& s, const std::vector<std::array<std::uint32_t, 3>>& triangles,
+    std::vector<Vec3>& positions, std::vector<std::uint32_t>& anchors,
+    std::vector<std::uint8_t>& border);
+
+}  // namespace adamesh::detail
