@@ -8,6 +8,7 @@
 #include "adamesh/error.h"
 #include "adamesh/graph.h"
 #include "adamesh/input.h"
+#include "adamesh/metrics.h"
 #include "adamesh/simplify.h"
 #include "adamesh/surfels.h"
 #include "mesh_checks.h"
@@ -17,6 +18,60 @@ using namespace adamesh;
 using testutil::mesh_topo;
 
 namespace {
+
+/// Sorted (χ, boundary loops) of every component: compares per-component topology.
+std::vector<std::pair<std::int64_t, std::int64_t>> component_signature(const Mesh& m) {
+  std::vector<std::pair<std::int64_t, std::int64_t>> sig;
+  for (const auto& c : topology(m).component_list) sig.push_back({c.euler, c.boundary_loops});
+  std::sort(sig.begin(), sig.end());
+  return sig;
+}
+
+/// Triangle pairs that intersect while sharing no vertex (segment–triangle tests both ways).
+std::size_t self_intersections(const Mesh& m) {
+  auto seg_tri = [](const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
+    const Vec3 n = cross(b - a, c - a);
+    const double dp = dot(p - a, n), dq = dot(q - a, n);
+    if ((dp > 0 && dq > 0) || (dp < 0 && dq < 0) || dp == dq) return false;
+    const Vec3 x = p + (q - p) * (dp / (dp - dq));
+    const double s1 = dot(cross(b - a, x - a), n), s2 = dot(cross(c - b, x - b), n),
+                 s3 = dot(cross(a - c, x - c), n);
+    return (s1 > 0 && s2 > 0 && s3 > 0) || (s1 < 0 && s2 < 0 && s3 < 0);
+  };
+  const std::size_t nf = m.num_triangles();
+  std::vector<Box> boxes(nf);
+  for (std::size_t f = 0; f < nf; ++f) {
+    Box b{m.vertex(m.triangles[3 * f]), m.vertex(m.triangles[3 * f])};
+    for (int k = 1; k < 3; ++k) {
+      b.lo = vmin(b.lo, m.vertex(m.triangles[3 * f + k]));
+      b.hi = vmax(b.hi, m.vertex(m.triangles[3 * f + k]));
+    }
+    boxes[f] = b;
+  }
+  std::size_t hits = 0;
+  for (std::size_t f = 0; f < nf; ++f)
+    for (std::size_t g = f + 1; g < nf; ++g) {
+      const Box &a = boxes[f], &b = boxes[g];
+      if (a.hi.x < b.lo.x || b.hi.x < a.lo.x || a.hi.y < b.lo.y || b.hi.y < a.lo.y ||
+          a.hi.z < b.lo.z || b.hi.z < a.lo.z)
+        continue;
+      const std::uint32_t* u = &m.triangles[3 * f];
+      const std::uint32_t* v = &m.triangles[3 * g];
+      bool share = false;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) share |= u[i] == v[j];
+      if (share) continue;
+      const Vec3 A[3] = {m.vertex(u[0]), m.vertex(u[1]), m.vertex(u[2])};
+      const Vec3 B[3] = {m.vertex(v[0]), m.vertex(v[1]), m.vertex(v[2])};
+      bool hit = false;
+      for (int i = 0; i < 3 && !hit; ++i) {
+        hit |= seg_tri(A[i], A[(i + 1) % 3], B[0], B[1], B[2]);
+        hit |= seg_tri(B[i], B[(i + 1) % 3], A[0], A[1], A[2]);
+      }
+      hits += hit;
+    }
+  return hits;
+}
 
 /// Median radius ratio q = 2 r_in / r_circ of the triangles.
 double median_q(const Mesh& m) {
@@ -35,33 +90,44 @@ double median_q(const Mesh& m) {
 }
 
 /// Checks the base mesh of a complex against its marching-cubes topology; returns the mesh.
+/// Small inputs also run the covering validator and the independent topology oracle; large ones
+/// (over 150k surfels) use the metrics module's topology only, to keep `make test` quick.
 BaseMesh check_complex(const SurfelComplex& sc, const ScalarField* field, SimplifyOptions opt,
                        const std::string& label) {
-  const auto ref = mesh_topo(marching_cubes(sc));
-  opt.validate = true;
+  const bool small = sc.num_surfels() <= 150000;
+  const Mesh mc = marching_cubes(sc);
+  opt.validate = small;
   const auto t0 = std::chrono::steady_clock::now();
   BaseMesh bm = simplify(sc, field, opt);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const auto got = mesh_topo(bm.mesh);
   SCOPED_TRACE(label);
-  EXPECT_EQ(got.chi, ref.chi);
+  const TopologyReport ref = topology(mc), got = topology(bm.mesh);
+  EXPECT_EQ(got.euler, ref.euler);
   EXPECT_EQ(got.components, ref.components);
   EXPECT_EQ(got.boundary_loops, ref.boundary_loops);
   EXPECT_EQ(got.nonmanifold_edges, 0);
   EXPECT_EQ(got.nonmanifold_vertices, 0);
-  EXPECT_EQ(got.degenerate, 0);
-  EXPECT_EQ(got.duplicates, 0);
+  EXPECT_EQ(got.degenerate_triangles, 0);
+  EXPECT_EQ(got.duplicate_triangles, 0);
   EXPECT_TRUE(got.oriented);
-  const auto& v = bm.stats.validation;
-  EXPECT_TRUE(v.ok()) << "uncovered " << v.uncovered << " independence " << v.independence
-                      << " grading " << v.grading << " non-disks " << v.non_disks << " violated "
-                      << v.violated_cells;
+  EXPECT_EQ(got.unreferenced_vertices, 0);
+  EXPECT_EQ(component_signature(bm.mesh), component_signature(mc)) << "per-component χ/loops";
+  if (small) {  // an independent oracle agrees
+    const auto t = mesh_topo(bm.mesh);
+    EXPECT_EQ(t.chi, ref.euler);
+    EXPECT_EQ(t.boundary_loops, ref.boundary_loops);
+    EXPECT_EQ(t.nonmanifold_vertices, 0);
+    const auto& v = bm.stats.validation;
+    EXPECT_TRUE(v.ok()) << "uncovered " << v.uncovered << " independence " << v.independence
+                        << " grading " << v.grading << " non-disks " << v.non_disks
+                        << " violated " << v.violated_cells;
+  }
   std::printf("%-28s surfels %7zu -> V %6zu F %6zu chi %5ld comps %5ld loops %4ld | disks %zu "
-              "events %zu halvings %zu repaired %zu fallback %zu | median q %.3f | %.2fs\n",
+              "events %zu split %zu fallback %zu | median q %.3f | %.2fs\n",
               label.c_str(), sc.num_surfels(), bm.mesh.num_vertices(), bm.mesh.num_triangles(),
-              got.chi, got.components, got.boundary_loops, bm.stats.disks, bm.stats.events,
-              bm.stats.halvings, bm.stats.violated_cells_repaired, bm.stats.fallback_components,
-              median_q(bm.mesh), secs);
+              static_cast<long>(got.euler), static_cast<long>(got.components),
+              static_cast<long>(got.boundary_loops), bm.stats.disks, bm.stats.events,
+              bm.stats.split_cells, bm.stats.fallback_components, median_q(bm.mesh), secs);
   for (std::size_t i = 0; i < bm.stats.warnings.size() && i < 5; ++i)
     std::printf("    warning: %s\n", bm.stats.warnings[i].c_str());
   return bm;
@@ -74,6 +140,7 @@ BaseMesh check_shape(const std::string& shape, int res, SimplifyOptions opt = {}
   const SurfelComplex sc = build_surfels(*in.volume, 0.0, in.inside_sign);
   BaseMesh bm = check_complex(sc, in.field.get(), opt, shape + " @" + std::to_string(res));
   EXPECT_GE(median_q(bm.mesh), 0.6) << shape;
+  EXPECT_EQ(self_intersections(bm.mesh), 0u) << shape;
   EXPECT_EQ(bm.stats.fallback_components, 0u) << shape;
   return bm;
 }

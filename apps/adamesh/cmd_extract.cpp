@@ -175,6 +175,8 @@ int cmd_extract(const Argv& argv) {
                      {"repair_rounds", st.repair_rounds},
                      {"violated_cells_repaired", st.violated_cells_repaired},
                      {"regularized", st.regularized},
+                     {"split_cells", st.split_cells},
+                     {"cone_cells", st.cone_cells},
                      {"violations_by_kind", st.violations_by_kind}};
     if (st.validation.ran)
       r["validation"] = {{"ok", st.validation.ok()},

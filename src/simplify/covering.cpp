@@ -185,22 +185,19 @@ Covering build_covering(const SurfelComplex& sc, const ConnectivityGraph& g,
   stats.repair_rounds = round;
   stats.time_voronoi_s += seconds_since(t1);
 
-  // Compact: keep the cells that own vertices, in disk order. Stuck cells become cones; those
-  // that are not even disks (pinched, disconnected, holed) are split into one cell per surfel.
+  // Compact: keep the cells that own vertices, in disk order. Stuck cells are split into one
+  // cell per surfel, each triangulated as the fan of its polygon (a cone over its nodes).
   std::vector<std::uint32_t> remap(cover.num_disks(), Covering::kNoCell);
   for (std::uint32_t d = 0; d < cover.num_disks(); ++d) {
     if (!vor.cell_alive(d)) continue;
-    const auto it = stuck.find(d);
-    const bool split = it != stuck.end() && (it->second == kNotDisk || it->second == kFanPinch);
-    if (split) {
-      ++stats.split_cells;
-      continue;
-    }
-    remap[d] = static_cast<std::uint32_t>(cov.centre.size());
+    // A split cell keeps its disk (it is part of the covering) but owns no surfel: every one of
+    // its surfels becomes a cell of its own below (a cone = the fan of its polygon).
+    const bool split = stuck.count(d) != 0;
+    if (!split) remap[d] = static_cast<std::uint32_t>(cov.centre.size());
+    stats.split_cells += split;
     cov.centre.push_back(cover.centre(d));
     cov.radius.push_back(cover.radius(d));
-    cov.cone.push_back(it != stuck.end() ? 1 : 0);
-    stats.cone_cells += it != stuck.end();
+    cov.cone.push_back(0);
   }
   cov.cell.resize(n);
   for (std::size_t v = 0; v < n; ++v) {

@@ -144,10 +144,23 @@ double DiskCover::explore(std::uint32_t x, double R, int first, int last) {
       if (r >= from && r < to) valid_[j - first] = ok;
     }
   };
+  // A ball that stays non-disk over a span of 1.5 r_min will not become a disk again at a radius
+  // worth having (transient corner contacts close within a voxel or two): stop there. Radii
+  // beyond the stop count as invalid, which only makes disks smaller, never wrong.
+  double invalid_since = -1;
   dijkstra(
       g_, ws_, x, R,
       [&](std::uint32_t u, double d) {
-        if (d > last_d && last_d >= 0) record(last_d, d);
+        if (d > last_d && last_d >= 0) {
+          record(last_d, d);
+          const bool ok = chi == 1 && pinches == 0;
+          if (ok) invalid_since = -1;
+          else if (invalid_since < 0) invalid_since = last_d;
+          else if (d - invalid_since > 1.5 * r_min_) {
+            centre_d = std::min(centre_d, d);  // nothing beyond d is known: treat as blocked
+            return Visit::stop;
+          }
+        }
         if (u != x && centre_disk_[u] >= 0) {  // independence: the disk must not reach a centre
           centre_d = d;
           return Visit::stop;
@@ -173,7 +186,8 @@ double DiskCover::explore(std::uint32_t x, double R, int first, int last) {
         return Visit::expand;
       },
       [&](std::uint32_t w) { return active_[w] != 0; });
-  if (last_d >= 0) record(last_d, centre_d);
+  // Nothing beyond R was explored: the last prefix stands for radii up to R only.
+  if (last_d >= 0) record(last_d, std::min(centre_d, std::nextafter(R, kInf)));
   return centre_d;
 }
 
@@ -256,8 +270,10 @@ void DiskCover::accept(std::uint32_t x, const Grown& grown) {
       [&](std::uint32_t w) { return active_[w] != 0; });
 }
 
-bool DiskCover::halve(std::uint32_t z) {
-  const int top = max_level_ + kRepairLevels;
+bool DiskCover::halve(std::uint32_t z, bool grading) {
+  // Repairs stop kRepairLevels below the growth floor; grading cascades may go further (down to
+  // the centre alone), so that radii sharing a surfel always stay within a factor two.
+  const int top = grading ? kDeepestLevel : max_level_ + kRepairLevels;
   if (level_[z] >= top || radius_[z] <= 0) {
     ++stats_.floor_conflicts;
     return false;
@@ -270,7 +286,7 @@ bool DiskCover::halve(std::uint32_t z) {
   int level = top;
   double r = 0;
   for (int j = level_[z] + 1; j <= top; ++j)
-    if (valid_[j - level_[z] - 1]) {
+    if (valid_[j - level_[z] - 1] && radius_of(j) < old_r) {
       level = j;
       r = radius_of(j);
       break;
@@ -290,7 +306,9 @@ bool DiskCover::halve(std::uint32_t z) {
           }
         } else {
           for_each_cover(v, [&](std::uint32_t w) {
-            if (w != z && radius_[w] > big) queue_halving(w);
+            if (w == z) return;
+            if (radius_[w] > big) queue_halving(w);
+            if (radius_[w] > 0 && r > 2.0 * radius_[w] * (1 + 1e-9)) queue_halving(z);
           });
         }
         return Visit::expand;
@@ -304,7 +322,7 @@ void DiskCover::process_halvings() {
     const std::uint32_t z = halving_.back();
     halving_.pop_back();
     halving_queued_[z] = 0;
-    halve(z);
+    halve(z, true);
   }
 }
 

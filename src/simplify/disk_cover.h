@@ -48,6 +48,7 @@ class DiskCover {
   static constexpr std::uint32_t kNil = 0xffffffffu;
   /// Voronoi repair may halve disks this many levels below the growth floor r_max/2^K.
   static constexpr int kRepairLevels = 2;
+  static constexpr int kDeepestLevel = 40;
 
   DiskCover(const SurfelComplex& sc, const ConnectivityGraph& g, std::vector<std::uint8_t> active,
             double r_max, double r_min, SimplifyStats& stats);
@@ -56,8 +57,9 @@ class DiskCover {
   void seed();
   /// Grows disks until every active vertex is covered (candidate heap empty).
   void run();
-  /// Halves disk d (and cascades to keep the grading); false when d is already at r_min.
-  bool halve(std::uint32_t d);
+  /// Halves disk d (and cascades to keep the grading); false when d is already at the floor
+  /// (repairs: kRepairLevels below r_max/2^K; grading cascades: kDeepestLevel).
+  bool halve(std::uint32_t d, bool grading = false);
   void process_halvings();
   /// Removes a component from the covering (fallback): its vertices become inactive.
   void deactivate(const std::vector<std::uint32_t>& vertices);

@@ -185,6 +185,23 @@ bool border_face(const SurfelComplex& sc, std::uint32_t n0, std::uint32_t n1, in
 
 }  // namespace
 
+/// Replaces every flagged cell by one cell per member surfel (each a cone over its polygon).
+void split_cells(Covering& cov, const std::vector<std::uint8_t>& split, SimplifyStats& stats) {
+  bool any = false;
+  for (auto f : split) any |= f != 0;
+  if (!any) return;
+  for (std::uint32_t v = 0; v < cov.cell.size(); ++v) {
+    const auto c = cov.cell[v];
+    if (c == Covering::kNoCell || c >= split.size() || !split[c]) continue;
+    cov.cell[v] = static_cast<std::uint32_t>(cov.centre.size());
+    cov.centre.push_back(v);
+    cov.radius.push_back(0.0);
+    cov.cone.push_back(1);
+    ++stats.cone_cells;
+  }
+  for (std::size_t c = 0; c < split.size(); ++c) stats.split_cells += split[c];
+}
+
 BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
                          const Covering& cov_in, const ScalarField* field,
                          const SimplifyOptions& opt, SimplifyStats stats) {
@@ -210,15 +227,13 @@ BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
     for (std::size_t v = 0; v < cells.size(); ++v)
       if (cells[v] != Covering::kNoCell && cov.fallback[g.component[v]]) cells[v] = Covering::kNoCell;
     const HybridResult hr = hybrid_triangles(sc, cells, cov.centre, cov.cone);
-    if (!hr.problem_cells.empty()) {  // escalate: dual cell → cone, cone → component fallback
+    if (!hr.problem_cells.empty()) {  // escalate: split cells into surfels, then fall back
+      std::vector<std::uint8_t> split(cov.centre.size(), 0);
       for (auto c : hr.problem_cells) {
-        if (!cov.cone[c]) {
-          cov.cone[c] = 1;
-          ++stats.cone_cells;
-        } else {
-          fall_back(g.component[cov.centre[c]], "cells are not disks at the smallest radius");
-        }
+        if (!cov.cone[c]) split[c] = 1;
+        else fall_back(g.component[cov.centre[c]], "cells are not disks at the smallest radius");
       }
+      split_cells(cov, split, stats);
       continue;
     }
     // Cell vertices.
@@ -249,6 +264,7 @@ BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
       po.tolerance = 1e-4 * h;
       po.max_step = 0.5 * h;
       const bool on_border = border_surfel[c] != Covering::kNoCell && !cov.cone[c];
+      const bool project = field && opt.project_vertices && !cov.cone[c];
       if (on_border) {
         anchor = border_surfel[c];
         const auto nodes = sc.nodes_of(anchor);
@@ -264,7 +280,7 @@ BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
           break;
         }
       }
-      if (field && opt.project_vertices) {
+      if (project) {
         const ProjectResult r = project_to_iso(*field, sc.iso, p, po);
         if (distance(r.point, p) < 2.0 * h) p = r.point;
       }
@@ -347,11 +363,27 @@ BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
                          std::to_string(reference[c].loops) + ")");
       }
     }
+    std::vector<std::uint8_t> split(ncell, 0);
     for (std::uint32_t cell = 0; cell < ncell; ++cell)
-      if (bad_comp[g.component[cov.centre[cell]]] && !cov.cone[cell]) {
-        cov.cone[cell] = 1;
-        ++stats.cone_cells;
+      if (bad_comp[g.component[cov.centre[cell]]] && !cov.cone[cell]) split[cell] = 1;
+    // Zero-area triangles (a projected centre landing on a kept node, or collinear with two):
+    // split the dual cells involved; their surfels' fans have no such degeneracy.
+    std::vector<std::uint32_t> cell_of_vertex(bm.mesh.num_vertices(), Covering::kNoCell);
+    for (std::uint32_t c = 0; c < ncell; ++c)
+      if (vertex_of[c] != Covering::kNoCell) cell_of_vertex[vertex_of[c]] = c;
+    for (std::size_t f = 0; f < bm.mesh.num_triangles(); ++f) {
+      const std::uint32_t* t = &bm.mesh.triangles[3 * f];
+      const Vec3 p0 = bm.mesh.vertex(t[0]), p1 = bm.mesh.vertex(t[1]), p2 = bm.mesh.vertex(t[2]);
+      if (norm2(cross(p1 - p0, p2 - p0)) > 0) continue;
+      for (int k = 0; k < 3; ++k) {
+        const auto c = t[k] < cell_of_vertex.size() ? cell_of_vertex[t[k]] : Covering::kNoCell;
+        if (c != Covering::kNoCell && !cov.cone[c]) {
+          split[c] = 1;
+          redo = true;
+        }
       }
+    }
+    split_cells(cov, split, stats);
     if (!redo) break;
   }
   stats.time_dual_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
