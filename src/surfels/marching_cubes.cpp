@@ -15,6 +15,7 @@
 // has more than two triangles and no triangle is repeated.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <array>
@@ -22,6 +23,7 @@
 
 #include "adamesh/surfels.h"
 #include "surfels/cell_table.h"
+#include "surfels/sized.h"
 
 namespace adamesh {
 
@@ -53,6 +55,17 @@ class PolygonTriangulator {
  public:
   void run(int len, const std::array<Vec3, kMax>& p, const std::array<int, kMax>& local_edge,
            std::uint32_t* tri, const std::uint32_t* ids) {
+    if (len == 4) {  // the common case, same choice and order as the general programme
+      const Cost c1{!detail::diagonal_allowed(local_edge[1], local_edge[3]),
+                    std::min(min_angle_quality(p[0], p[1], p[3]), min_angle_quality(p[1], p[2], p[3]))};
+      const Cost c2{!detail::diagonal_allowed(local_edge[0], local_edge[2]),
+                    std::min(min_angle_quality(p[0], p[2], p[3]), min_angle_quality(p[0], p[1], p[2]))};
+      const int m = c2.better_than(c1) ? 2 : 1;
+      const int o = m == 1 ? 1 : 0;  // second triangle (1,2,3) or (0,1,2)
+      const std::uint32_t t[6] = {ids[0], ids[m], ids[3], ids[o], ids[o + 1], ids[o + 2]};
+      std::copy(t, t + 6, tri);
+      return;
+    }
     len_ = len;
     for (int i = 0; i < len; ++i)
       for (int j = i + 1; j < len; ++j) {
@@ -106,10 +119,15 @@ class PolygonTriangulator {
 
 Mesh marching_cubes(const SurfelComplex& cx) {
   Mesh mesh;
-  mesh.positions = cx.node_pos;
   const std::size_t ns = cx.num_surfels();
   const std::size_t ntri = cx.surfel_nodes.size() - 2 * ns;
-  mesh.triangles.resize(3 * ntri);
+  tbb::parallel_invoke([&] { detail::sized(mesh.triangles, 3 * ntri); },
+                       [&] { detail::sized(mesh.positions, cx.node_pos.size()); });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cx.node_pos.size(), 1 << 16),
+                    [&](const auto& r) {
+                      std::copy(cx.node_pos.begin() + r.begin(), cx.node_pos.begin() + r.end(),
+                                mesh.positions.begin() + r.begin());
+                    });
   const std::int64_t nx = cx.grid.dims[0], plane = cx.grid.dims[0] * cx.grid.dims[1];
 
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ns, 4096), [&](const auto& r) {
