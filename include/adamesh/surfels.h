@@ -78,12 +78,22 @@ struct SurfelComplex {
   }
 };
 
-/// Builds the surfel complex of `volume` at `iso`. Parallel over z-slabs without locks.
+/// Builds the surfel complex of `volume` at `iso`. Parallel over z-slabs without locks; the
+/// result is byte-identical for any thread count. Ambiguous faces: asymptotic decider on the
+/// face's own four values (saddle value 0 counts as positive), so both voxels of a face agree.
+/// Orientation is combinatorial (docs/TOPOLOGY.md): polygons are counter-clockwise seen from the
+/// negative side, i.e. their normal follows −inside_sign·∇f, also for grids whose direction
+/// matrix reverses orientation. No interior tunnels are modelled (ALGORITHM.md 2.2).
+/// A volume with fewer than 2 samples along an axis has no voxels: empty complex.
+/// \throw Error(invalid_input) when iso is not finite or inside_sign is not ±1;
+///        Error(unsupported) when ids would overflow 32 bits.
 SurfelComplex build_surfels(const Volume& volume, double iso, double inside_sign = 1,
                             const SurfelOptions& options = {});
 
-/// Reference marching cubes: triangulates every surfel polygon over the shared node vertices.
-/// Watertight where the surface is closed, 2-manifold, consistently oriented (normals out).
+/// Reference marching cubes: triangulates every surfel polygon over the shared node vertices
+/// (vertex i = node i), maximising each polygon's minimum angle. Watertight where the surface is
+/// closed, 2-manifold, consistently oriented (normals out), no degenerate or duplicate triangles;
+/// χ(mesh) = complex.euler_characteristic(). Parallel (ambient oneTBB arena), deterministic.
 Mesh marching_cubes(const SurfelComplex& complex);
 
 }  // namespace adamesh
