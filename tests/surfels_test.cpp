@@ -280,3 +280,17 @@ TEST(Surfels, EmptyConstantAndFlatVolumes) {
   EXPECT_THROW(build_surfels(sample_volume({3, 3, 3}, [](double, double, double) { return 0.0; }), 0, 0),
                Error);
 }
+
+TEST(Surfels, ThinGridsAndManySlabs) {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (std::array<std::int64_t, 3> d : {std::array<std::int64_t, 3>{2, 2, 9}, {9, 2, 2}, {2, 9, 2},
+                                        {3, 2, 17}, {17, 3, 2}, {19, 18, 2}, {2, 23, 21}}) {
+    const Volume v = sample_volume(d, [&](double, double, double) { return u(rng); });
+    for (int threads : {1, 2}) {
+      const SurfelComplex cx = build_surfels(v, 0.1, 1, {threads});
+      EXPECT_EQ(validate_complex(cx), 0) << d[0] << "x" << d[1] << "x" << d[2];
+      EXPECT_GT(cx.num_surfels(), 0u);
+    }
+  }
+}
