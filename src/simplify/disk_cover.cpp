@@ -341,10 +341,6 @@ void DiskCover::run() {
   }
 }
 
-void DiskCover::deactivate(const std::vector<std::uint32_t>& vertices) {
-  for (std::uint32_t v : vertices) active_[v] = 0;
-}
-
 std::vector<std::uint32_t> DiskCover::take_new_disks() {
   std::vector<std::uint32_t> out;
   out.swap(new_disks_);

@@ -61,17 +61,13 @@ class DiskCover {
   /// (repairs: kRepairLevels below r_max/2^K; grading cascades: kDeepestLevel).
   bool halve(std::uint32_t d, bool grading = false);
   void process_halvings();
-  /// Removes a component from the covering (fallback): its vertices become inactive.
-  void deactivate(const std::vector<std::uint32_t>& vertices);
 
   std::size_t num_disks() const { return centre_.size(); }
   std::uint32_t centre(std::uint32_t d) const { return centre_[d]; }
   double radius(std::uint32_t d) const { return radius_[d]; }
   int level(std::uint32_t d) const { return level_[d]; }
-  int max_level() const { return max_level_; }
   bool covered(std::uint32_t v) const { return head_[v] != kNil; }
   bool active(std::uint32_t v) const { return active_[v] != 0; }
-  std::int32_t disk_of_centre(std::uint32_t v) const { return centre_disk_[v]; }
   /// Disks covering v.
   template <class F>
   void for_each_cover(std::uint32_t v, F&& f) const {
@@ -79,8 +75,6 @@ class DiskCover {
   }
   /// Disks accepted since the last call.
   std::vector<std::uint32_t> take_new_disks();
-  PathWorkspace& workspace() { return ws_; }
-  std::size_t covered_count() const { return covered_count_; }
   /// Called every few hundred disks with the covered fraction of the active vertices.
   std::function<void(double)> on_progress;
 
