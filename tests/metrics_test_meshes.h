@@ -1,10 +1,15 @@
 // Hand-made meshes with known answers for the metrics tests, and an analytic sphere field.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <initializer_list>
 #include <map>
 #include <numbers>
 #include <utility>
+#include <vector>
 
 #include "adamesh/field.h"
 #include "adamesh/mesh.h"

@@ -61,6 +61,8 @@ int cmd_stats(const Argv& argv) {
                               " has no default iso-value; give --iso V (adamesh info suggests one)");
     FieldErrorOptions fo;
     fo.inside_sign = in.inside_sign;
+    fo.max_step = in.volume->grid.min_spacing();  // one voxel per Newton step
+    fo.tolerance = 1e-5 * fo.max_step;
     fo.samples = samples;
     fo.threads = mo.threads;
     report.field = field_error(mesh, *in.field, iso, fo);

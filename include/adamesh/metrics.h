@@ -119,8 +119,12 @@ std::int64_t default_sample_count(const Mesh& mesh);
 struct FieldErrorOptions {
   double inside_sign = 1;    ///< inside where inside_sign·(f − iso) ≥ 0 (see input.h)
   std::int64_t samples = 0;  ///< 0 = default_sample_count()
-  /// Projection tolerance (world units); 0 = 1e-9 × the mesh's bounding-box diagonal.
+  /// Projection tolerance (world units); 0 = 1e-7 × the mesh's bounding-box diagonal.
+  /// `adamesh stats` passes 1e-5 × the voxel size.
   double tolerance = 0;
+  /// Cap on each Newton step (world units), which keeps projections on the nearby sheet of the
+  /// surface; 0 = the mesh's mean edge length. `adamesh stats` passes the voxel size.
+  double max_step = 0;
   int max_steps = 50;  ///< Newton steps per projection
   int threads = 0;
 };
@@ -132,8 +136,8 @@ struct FieldErrorReport {
   double eps_e = 0;           ///< edge deviation (length²)
   double eps_e_sqrt_rel = 0;  ///< sqrt(eps_e) / diagonal
   double eps_n = 0;           ///< normal deviation, in [0, 2]
-  /// Points whose projection did not converge (distance = |signed_distance| instead), among the
-  /// sample points, vertices and edge midpoints.
+  /// Points whose projection did not converge or ended more than 4× |signed_distance| away
+  /// (distance = |signed_distance| instead), among the sample points, vertices, edge midpoints.
   std::int64_t unconverged = 0;
   std::int64_t flat_gradient_triangles = 0;  ///< centroid with ∇f = 0 (m(T) = 0 in ε_n)
 };

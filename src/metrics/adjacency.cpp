@@ -20,10 +20,12 @@ Adjacency build_adjacency(const Mesh& m) {
   Adjacency a;
 
   a.proper.resize(nt);
+  a.side_edge.resize(3 * nt);  // filled below; sides of collapsed triangles get kNone here
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1 << 14), [&](const auto& r) {
     for (std::size_t t = r.begin(); t != r.end(); ++t) {
       const std::uint32_t* v = tri + 3 * t;
       a.proper[t] = v[0] != v[1] && v[1] != v[2] && v[2] != v[0];
+      if (!a.proper[t]) a.side_edge[3 * t] = a.side_edge[3 * t + 1] = a.side_edge[3 * t + 2] = kNone;
     }
   });
 
@@ -35,7 +37,7 @@ Adjacency build_adjacency(const Mesh& m) {
   for (std::size_t v = 0; v < nv; ++v) a.corner_offset[v + 1] += a.corner_offset[v];
   a.vertex_corners.resize(a.corner_offset[nv]);
   {
-    std::vector<std::uint32_t> cursor(a.corner_offset.begin(), a.corner_offset.end() - 1);
+    RawVector<std::uint32_t> cursor(a.corner_offset.begin(), a.corner_offset.end() - 1);
     for (std::size_t t = 0; t < nt; ++t)
       if (a.proper[t])
         for (int k = 0; k < 3; ++k)
@@ -56,7 +58,8 @@ Adjacency build_adjacency(const Mesh& m) {
     std::sort(out.begin(), out.end());
   };
 
-  std::vector<std::uint32_t> side_count(nv + 1, 0), edge_count(nv + 1, 0);
+  RawVector<std::uint32_t> side_count(nv + 1), edge_count(nv + 1);
+  side_count[0] = edge_count[0] = 0;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 1024), [&](const auto& r) {
     std::vector<std::pair<std::uint32_t, std::uint32_t>> buf;
     for (std::size_t v = r.begin(); v != r.end(); ++v) {
@@ -75,7 +78,6 @@ Adjacency build_adjacency(const Mesh& m) {
   a.edge_sides.resize(side_count[nv]);
   a.edge_offset.resize(ne + 1);
   a.edge_offset[ne] = side_count[nv];
-  a.side_edge.assign(3 * nt, kNone);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 1024), [&](const auto& r) {
     std::vector<std::pair<std::uint32_t, std::uint32_t>> buf;
     for (std::size_t v = r.begin(); v != r.end(); ++v) {

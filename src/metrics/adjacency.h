@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "adamesh/mesh.h"
+#include "metrics/buffers.h"
 
 namespace adamesh::detail {
 
@@ -15,16 +16,16 @@ constexpr std::uint32_t kNone = 0xffffffffu;
 /// Side s = 3t + k of triangle t runs from tri[k] to tri[(k+1) % 3]; corner c = 3t + k is
 /// vertex tri[k] of triangle t. Only *proper* triangles (three distinct indices) take part.
 struct Adjacency {
-  std::vector<std::uint8_t> proper;  ///< per triangle: 1 when its three indices differ
+  RawVector<std::uint8_t> proper;  ///< per triangle: 1 when its three indices differ
 
   /// Corners grouped by vertex, increasing corner id within a vertex.
   std::vector<std::uint32_t> corner_offset;  ///< num_vertices + 1
-  std::vector<std::uint32_t> vertex_corners;
+  RawVector<std::uint32_t> vertex_corners;
 
   /// Edges numbered in (smaller vertex, larger vertex) order; their sides in increasing id.
-  std::vector<std::uint32_t> edge_offset;  ///< num_edges + 1
-  std::vector<std::uint32_t> edge_sides;
-  std::vector<std::uint32_t> side_edge;    ///< per side: edge id, kNone for collapsed triangles
+  RawVector<std::uint32_t> edge_offset;  ///< num_edges + 1
+  RawVector<std::uint32_t> edge_sides;
+  RawVector<std::uint32_t> side_edge;    ///< per side: edge id, kNone for collapsed triangles
 
   std::size_t num_edges() const noexcept { return edge_offset.size() - 1; }
   std::uint32_t edge_valence(std::size_t e) const noexcept {

@@ -59,32 +59,28 @@ double point_triangle_distance2(const Vec3& p, const Vec3& a, const Vec3& b, con
   return norm2(p - (a + (vb * denom) * ab + (vc * denom) * ac));
 }
 
-std::uint32_t TriangleBvh::subtree_nodes(std::uint32_t n) const {
+std::uint32_t TriangleBvh::subtree_inner_nodes(std::uint32_t n) const {
   for (const auto& [size, leaves] : leaves_of_size_)
-    if (size == n) return 2 * leaves - 1;
-  return 1;  // not reached: every size met by build() is in the table
+    if (size == n) return leaves - 1;
+  return 0;  // not reached: every size met by build() is in the table
 }
 
 TriangleBvh::TriangleBvh(const Mesh& mesh) {
   const auto nt = static_cast<std::uint32_t>(mesh.num_triangles());
   if (nt == 0) return;
-  // Leaf counts of every subtree size the median splits produce (at most two sizes per level).
+  // Leaf counts of every subtree size the middle splits produce (at most two sizes per level).
   {
-    std::vector<std::uint32_t> level = {nt};
-    std::vector<std::uint32_t> sizes;
+    std::vector<std::uint32_t> level = {nt}, sizes;
     while (!level.empty()) {
       std::vector<std::uint32_t> next;
       for (std::uint32_t n : level) {
         if (std::find(sizes.begin(), sizes.end(), n) != sizes.end()) continue;
         sizes.push_back(n);
-        if (n > kLeaf) {
-          next.push_back(n / 2);
-          next.push_back(n - n / 2);
-        }
+        if (n > kLeaf) next.insert(next.end(), {n / 2, n - n / 2});
       }
       level = std::move(next);
     }
-    std::sort(sizes.begin(), sizes.end());  // children are smaller: fill bottom-up
+    std::sort(sizes.begin(), sizes.end());  // children first
     for (std::uint32_t n : sizes) {
       std::uint32_t leaves = 1;
       if (n > kLeaf) {
@@ -96,24 +92,83 @@ TriangleBvh::TriangleBvh(const Mesh& mesh) {
       leaves_of_size_.emplace_back(n, leaves);
     }
   }
-  std::vector<float> centroids(3 * std::size_t{nt});
+  // Primitive references carry their centroid: the median splits then touch contiguous memory.
+  refs_.resize(nt);
   tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, nt, 1 << 14), [&](const auto& r) {
-    for (std::uint32_t t = r.begin(); t != r.end(); ++t)
+    for (std::uint32_t t = r.begin(); t != r.end(); ++t) {
+      PrimRef& ref = refs_[t];
+      ref.id = t;
       for (int k = 0; k < 3; ++k)
-        centroids[3 * std::size_t{t} + k] =
-            (mesh.positions[3 * mesh.triangles[3 * t] + k] + mesh.positions[3 * mesh.triangles[3 * t + 1] + k] +
-             mesh.positions[3 * mesh.triangles[3 * t + 2] + k]) / 3.0f;
+        ref.c[k] = (mesh.positions[3 * mesh.triangles[3 * std::size_t{t}] + k] +
+                    mesh.positions[3 * mesh.triangles[3 * std::size_t{t} + 1] + k] +
+                    mesh.positions[3 * mesh.triangles[3 * std::size_t{t} + 2] + k]) / 3.0f;
+    }
   });
   prims_.resize(nt);
-  std::iota(prims_.begin(), prims_.end(), 0u);
-  nodes_.resize(subtree_nodes(nt));
+  const std::uint32_t leaves = subtree_inner_nodes(nt) + 1;
+  nodes_.resize(leaves - 1);
+  leaf_begin_.resize(leaves + 1);
+  leaf_begin_[leaves] = nt;
   corners_.resize(9 * std::size_t{nt});
-  // Corner coordinates in leaf order, filled by build() at the leaves.
   mesh_ = &mesh;
-  build(0, 0, nt, centroids);
+  root_ = build(0, 0, nt, 0, root_box_);
   mesh_ = nullptr;
+  refs_ = {};
   slot_.resize(nt);
   for (std::uint32_t i = 0; i < nt; ++i) slot_[prims_[i]] = i;
+}
+
+std::int32_t TriangleBvh::build(std::uint32_t slot, std::uint32_t begin, std::uint32_t end,
+                                std::uint32_t leaf, Box3f& box) {
+  const std::uint32_t n = end - begin;
+  if (n <= kLeaf) {
+    leaf_begin_[leaf] = begin;
+    for (std::uint32_t i = begin; i < end; ++i) prims_[i] = refs_[i].id;
+    for (int k = 0; k < 3; ++k) {
+      box.lo[k] = std::numeric_limits<float>::infinity();
+      box.hi[k] = -std::numeric_limits<float>::infinity();
+    }
+    for (std::uint32_t i = begin; i < end; ++i)
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 3; ++k) {
+          const float x = mesh_->positions[3 * mesh_->triangles[3 * std::size_t{prims_[i]} + c] + k];
+          corners_[9 * std::size_t{i} + 3 * c + k] = x;
+          box.lo[k] = std::min(box.lo[k], x);
+          box.hi[k] = std::max(box.hi[k], x);
+        }
+    return ~static_cast<std::int32_t>(leaf);
+  }
+  // Median split on the longest axis of the centroid bounds (ties by index: a unique split).
+  float clo[3], chi[3];
+  for (int k = 0; k < 3; ++k) clo[k] = chi[k] = refs_[begin].c[k];
+  for (std::uint32_t i = begin + 1; i < end; ++i)
+    for (int k = 0; k < 3; ++k) {
+      clo[k] = std::min(clo[k], refs_[i].c[k]);
+      chi[k] = std::max(chi[k], refs_[i].c[k]);
+    }
+  int axis = 0;
+  for (int k = 1; k < 3; ++k)
+    if (chi[k] - clo[k] > chi[axis] - clo[axis]) axis = k;
+  const std::uint32_t mid = begin + n / 2;
+  std::nth_element(refs_.begin() + begin, refs_.begin() + mid, refs_.begin() + end,
+                   [axis](const PrimRef& x, const PrimRef& y) {
+                     return x.c[axis] < y.c[axis] || (x.c[axis] == y.c[axis] && x.id < y.id);
+                   });
+  const std::uint32_t left_slot = slot + 1, right_slot = slot + 1 + subtree_inner_nodes(n / 2);
+  const std::uint32_t right_leaf = leaf + subtree_inner_nodes(n / 2) + 1;
+  Node& nd = nodes_[slot];
+  auto left = [&] { nd.child[0] = build(left_slot, begin, mid, leaf, nd.box[0]); };
+  auto right = [&] { nd.child[1] = build(right_slot, mid, end, right_leaf, nd.box[1]); };
+  if (n >= kParallelBuild) tbb::parallel_invoke(left, right);
+  else {
+    left();
+    right();
+  }
+  for (int k = 0; k < 3; ++k) {
+    box.lo[k] = std::min(nd.box[0].lo[k], nd.box[1].lo[k]);
+    box.hi[k] = std::max(nd.box[0].hi[k], nd.box[1].hi[k]);
+  }
+  return static_cast<std::int32_t>(slot);
 }
 
 double TriangleBvh::distance2_to(const Vec3& p, std::uint32_t i) const {
@@ -121,78 +176,25 @@ double TriangleBvh::distance2_to(const Vec3& p, std::uint32_t i) const {
   return point_triangle_distance2(p, {c[0], c[1], c[2]}, {c[3], c[4], c[5]}, {c[6], c[7], c[8]});
 }
 
-void TriangleBvh::build(std::uint32_t node, std::uint32_t begin, std::uint32_t end,
-                        const std::vector<float>& centroids) {
-  Node& nd = nodes_[node];
-  const std::uint32_t n = end - begin;
-  if (n <= kLeaf) {
-    nd.index = begin;
-    nd.count = n;
-    for (int k = 0; k < 3; ++k) {
-      nd.lo[k] = std::numeric_limits<float>::infinity();
-      nd.hi[k] = -std::numeric_limits<float>::infinity();
-    }
-    for (std::uint32_t i = begin; i < end; ++i)
-      for (int c = 0; c < 3; ++c)
-        for (int k = 0; k < 3; ++k) {
-          const float x = mesh_->positions[3 * mesh_->triangles[3 * std::size_t{prims_[i]} + c] + k];
-          corners_[9 * std::size_t{i} + 3 * c + k] = x;
-          nd.lo[k] = std::min(nd.lo[k], x);
-          nd.hi[k] = std::max(nd.hi[k], x);
-        }
-    return;
-  }
-  float clo[3], chi[3];
-  for (int k = 0; k < 3; ++k) {
-    clo[k] = std::numeric_limits<float>::infinity();
-    chi[k] = -std::numeric_limits<float>::infinity();
-  }
-  for (std::uint32_t i = begin; i < end; ++i)
-    for (int k = 0; k < 3; ++k) {
-      const float x = centroids[3 * std::size_t{prims_[i]} + k];
-      clo[k] = std::min(clo[k], x);
-      chi[k] = std::max(chi[k], x);
-    }
-  int axis = 0;
-  for (int k = 1; k < 3; ++k)
-    if (chi[k] - clo[k] > chi[axis] - clo[axis]) axis = k;
-  const std::uint32_t mid = begin + n / 2;
-  std::nth_element(prims_.begin() + begin, prims_.begin() + mid, prims_.begin() + end,
-                   [&](std::uint32_t x, std::uint32_t y) {
-                     const float cx = centroids[3 * std::size_t{x} + axis], cy = centroids[3 * std::size_t{y} + axis];
-                     return cx < cy || (cx == cy && x < y);  // total order: unique split
-                   });
-  const std::uint32_t left = node + 1, right = node + 1 + subtree_nodes(n / 2);
-  nd.index = right;
-  nd.count = 0;
-  if (n >= kParallelBuild)
-    tbb::parallel_invoke([&] { build(left, begin, mid, centroids); },
-                         [&] { build(right, mid, end, centroids); });
-  else {
-    build(left, begin, mid, centroids);
-    build(right, mid, end, centroids);
-  }
-  for (int k = 0; k < 3; ++k) {
-    nd.lo[k] = std::min(nodes_[left].lo[k], nodes_[right].lo[k]);
-    nd.hi[k] = std::max(nodes_[left].hi[k], nodes_[right].hi[k]);
-  }
-}
-
 TriangleBvh::Closest TriangleBvh::closest(const Vec3& p, std::uint32_t hint) const {
   Closest best;
-  if (nodes_.empty()) return best;
+  if (prims_.empty()) return best;
   if (hint < slot_.size()) {
     best.distance2 = distance2_to(p, slot_[hint]);
     best.triangle = hint;
   }
-  std::uint32_t stack[128];
+  struct Entry {
+    std::int32_t ref;
+    double d2;
+  } stack[96];
   int top = 0;
-  stack[top++] = 0;
+  stack[top++] = {root_, box_distance2(p, root_box_.lo, root_box_.hi)};
   while (top > 0) {
-    const Node& nd = nodes_[stack[--top]];
-    if (box_distance2(p, nd.lo, nd.hi) >= best.distance2) continue;
-    if (nd.count > 0) {
-      for (std::uint32_t i = nd.index; i < nd.index + nd.count; ++i) {
+    const Entry e = stack[--top];
+    if (e.d2 >= best.distance2) continue;
+    if (e.ref < 0) {
+      const std::uint32_t leaf = ~static_cast<std::uint32_t>(e.ref);
+      for (std::uint32_t i = leaf_begin_[leaf]; i < leaf_begin_[leaf + 1]; ++i) {
         const double d2 = distance2_to(p, i);
         if (d2 < best.distance2) {
           best.distance2 = d2;
@@ -201,17 +203,14 @@ TriangleBvh::Closest TriangleBvh::closest(const Vec3& p, std::uint32_t hint) con
       }
       continue;
     }
-    const std::uint32_t l = static_cast<std::uint32_t>(&nd - nodes_.data()) + 1, r = nd.index;
-    const double dl = box_distance2(p, nodes_[l].lo, nodes_[l].hi);
-    const double dr = box_distance2(p, nodes_[r].lo, nodes_[r].hi);
-    // Push the farther child first so the nearer one is searched first.
-    if (dl <= dr) {
-      if (dr < best.distance2) stack[top++] = r;
-      if (dl < best.distance2) stack[top++] = l;
-    } else {
-      if (dl < best.distance2) stack[top++] = l;
-      if (dr < best.distance2) stack[top++] = r;
-    }
+    const Node& nd = nodes_[static_cast<std::uint32_t>(e.ref)];
+    const double d0 = box_distance2(p, nd.box[0].lo, nd.box[0].hi);
+    const double d1 = box_distance2(p, nd.box[1].lo, nd.box[1].hi);
+    // Push the farther child first so that the nearer one is searched first.
+    const int near = d1 < d0 ? 1 : 0;
+    const double dn = near ? d1 : d0, df = near ? d0 : d1;
+    if (df < best.distance2) stack[top++] = {nd.child[1 - near], df};
+    if (dn < best.distance2) stack[top++] = {nd.child[near], dn};
   }
   return best;
 }

@@ -5,8 +5,9 @@
 //   ε_e       Σ_e D(mid e)² · Σ_{T∋e} A(T)/2  /  Σ_T A(T)   (border edges: A(T1)/2);
 //   ε_n       Σ_T A(T) (1 − n(T)·m(T)) / Σ_T A(T), n the unit triangle normal and m the unit
 //             outward field normal −inside_sign·∇f/|∇f| at the centroid.
-// A projection that does not converge falls back to |signed_distance| (capped at the larger of
-// the mesh's and the field domain's diagonals) and is counted in `unconverged`.
+// A projection that does not converge, or that ends more than 4× the first-order distance away,
+// falls back to |signed_distance| (capped at the larger of the mesh's and the field domain's
+// diagonals) and is counted in `unconverged`.
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
@@ -16,6 +17,7 @@
 
 #include "adamesh/metrics.h"
 #include "metrics/adjacency.h"
+#include "metrics/buffers.h"
 #include "metrics/mesh_check.h"
 #include "metrics/parallel.h"
 #include "metrics/sampling.h"
@@ -33,16 +35,31 @@ FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double 
     const double scale = std::max(r.diagonal, field.domain().diagonal());
     ProjectOptions po;
     po.max_steps = opt.max_steps;
-    po.tolerance = opt.tolerance > 0 ? opt.tolerance : 1e-9 * (r.diagonal > 0 ? r.diagonal : scale);
-    po.max_step = std::max(0.1 * scale, po.tolerance);
+    po.tolerance = opt.tolerance > 0 ? opt.tolerance : 1e-7 * (r.diagonal > 0 ? r.diagonal : scale);
+    if (opt.max_step > 0) {
+      po.max_step = opt.max_step;
+    } else {  // mean edge length (each interior edge counted twice: no matter for a mean)
+      const double len = detail::chunked_sum(nt, [&](std::size_t t) {
+        const Vec3 a = mesh.vertex(tri[3 * t]), b = mesh.vertex(tri[3 * t + 1]), c = mesh.vertex(tri[3 * t + 2]);
+        return distance(a, b) + distance(b, c) + distance(c, a);
+      });
+      po.max_step = nt > 0 ? len / (3.0 * static_cast<double>(nt)) : scale;
+    }
+    po.max_step = std::max(po.max_step, po.tolerance);
     const double cap = scale > 0 ? scale : 1.0;
 
+    // A projection is used when it converged and stayed near: no farther than kFarFactor times
+    // the first-order distance |f − iso|/|∇f| (plus the tolerance). Longer paths mean the
+    // Newton steps left the nearby sheet (e.g. a sampled field's gradient pointing away from the
+    // closest crossing); then, as for non-convergence, the first-order distance is used.
+    constexpr double kFarFactor = 4;
     std::atomic<std::int64_t> unconverged{0};
     auto dist = [&](const Vec3& p) {
-      const ProjectResult pr = project_to_iso(field, iso, p, po);
-      if (pr.converged) return distance(pr.point, p);
-      unconverged.fetch_add(1, std::memory_order_relaxed);
       const double sd = std::abs(signed_distance(field, iso, p, cap));
+      const ProjectResult pr = project_to_iso(field, iso, p, po);
+      const double d = distance(pr.point, p);
+      if (pr.converged && d <= kFarFactor * sd + po.tolerance) return d;
+      unconverged.fetch_add(1, std::memory_order_relaxed);
       return std::isfinite(sd) ? sd : cap;  // NaN field values: count as far away
     };
 
@@ -50,7 +67,7 @@ FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double 
     const std::uint64_t n = opt.samples > 0 ? static_cast<std::uint64_t>(opt.samples)
                                             : static_cast<std::uint64_t>(default_sample_count(mesh));
     const detail::SampleLayout layout = detail::layout_samples(mesh, n);
-    std::vector<double> d(layout.count());
+    detail::RawVector<double> d(layout.count());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 256), [&](const auto& rg) {
       for (std::size_t t = rg.begin(); t != rg.end(); ++t)
         for (std::uint64_t g = layout.first[t]; g < layout.first[t + 1]; ++g)
@@ -72,7 +89,7 @@ FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double 
         *x /= r.diagonal;
 
     // Triangle areas and ε_n.
-    std::vector<double> area(nt);
+    detail::RawVector<double> area(nt);
     std::atomic<std::int64_t> flat{0};
     const double total_area = detail::chunked_sum(nt, [&](std::size_t t) {
       const Vec3 a = mesh.vertex(tri[3 * t]), b = mesh.vertex(tri[3 * t + 1]), c = mesh.vertex(tri[3 * t + 2]);

@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "adamesh/metrics.h"
+#include "metrics/buffers.h"
 #include "metrics/bvh.h"
 #include "metrics/mesh_check.h"
 #include "metrics/parallel.h"
@@ -29,7 +30,7 @@ DistanceStats one_sided(const Mesh& from, const detail::TriangleBvh& to, std::in
     return std::sqrt(c.distance2);
   };
   const detail::SampleLayout layout = detail::layout_samples(from, n);
-  std::vector<double> d(layout.count());
+  detail::RawVector<double> d(layout.count());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, from.num_triangles(), 256), [&](const auto& r) {
     std::uint32_t hint = detail::kNoTriangle;
     for (std::size_t t = r.begin(); t != r.end(); ++t)

@@ -67,8 +67,8 @@ double chunked_sum(std::size_t n, F&& f, std::size_t chunk = kChunk) {
 }
 
 /// Nearest-rank percentile (p in [0, 100]) of `v`, which it partially reorders; 0 when empty.
-template <class T>
-double percentile(std::vector<T>& v, double p) {
+template <class Vector>
+double percentile(Vector& v, double p) {
   if (v.empty()) return 0;
   const double rank = std::ceil(p / 100.0 * static_cast<double>(v.size()));
   const std::size_t k = static_cast<std::size_t>(std::clamp(rank, 1.0, double(v.size()))) - 1;

@@ -11,6 +11,7 @@
 #include <numbers>
 
 #include "adamesh/metrics.h"
+#include "metrics/buffers.h"
 #include "metrics/mesh_check.h"
 #include "metrics/parallel.h"
 
@@ -59,7 +60,7 @@ QualityReport quality(const Mesh& mesh, const MetricsOptions& options) {
     QualityReport r;
     r.triangles = static_cast<std::int64_t>(nt);
     if (nt == 0) return r;
-    std::vector<float> min_angles(nt);
+    detail::RawVector<float> min_angles(nt);
     const QualityParts p = detail::chunked_reduce(
         nt, QualityParts{},
         [&](std::size_t b, std::size_t e) {

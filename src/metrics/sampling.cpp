@@ -11,7 +11,7 @@ namespace adamesh::detail {
 
 SampleLayout layout_samples(const Mesh& m, std::uint64_t n) {
   const std::size_t nt = m.num_triangles();
-  std::vector<double> area(nt);
+  RawVector<double> area(nt);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1 << 14), [&](const auto& r) {
     for (std::size_t t = r.begin(); t != r.end(); ++t) {
       const Vec3 a = m.vertex(m.triangles[3 * t]);
@@ -42,7 +42,7 @@ std::vector<std::uint32_t> referenced_vertices(const Mesh& m) {
   return out;
 }
 
-DistanceStats summarize_distances(std::vector<double>& d, double vertex_max) {
+DistanceStats summarize_distances(RawVector<double>& d, double vertex_max) {
   DistanceStats s;
   s.samples = static_cast<std::int64_t>(d.size());
   s.max = vertex_max;

@@ -13,6 +13,7 @@
 
 #include "adamesh/mesh.h"
 #include "adamesh/metrics.h"
+#include "metrics/buffers.h"
 
 namespace adamesh::detail {
 
@@ -40,6 +41,6 @@ inline Vec3 sample_point(const Mesh& m, std::size_t t, std::uint64_t g) {
 std::vector<std::uint32_t> referenced_vertices(const Mesh& mesh);
 
 /// mean, rms and p99 of the per-sample distances (reordered), max over them and `vertex_max`.
-DistanceStats summarize_distances(std::vector<double>& sample_distances, double vertex_max);
+DistanceStats summarize_distances(RawVector<double>& sample_distances, double vertex_max);
 
 }  // namespace adamesh::detail

@@ -65,7 +65,7 @@ class MinUnionFind {
   std::uint32_t load(std::uint32_t x) {
     return std::atomic_ref<std::uint32_t>(parent_[x]).load(std::memory_order_relaxed);
   }
-  std::vector<std::uint32_t> parent_;
+  detail::RawVector<std::uint32_t> parent_;
 };
 
 /// Sequential union-find with parity (odd = the two triangles need opposite flips).
@@ -182,19 +182,23 @@ TopologyReport topology(const Mesh& mesh, const MetricsOptions& options) {
     r.inconsistent_edges = ec.inconsistent;
     r.oriented = ec.inconsistent == 0;
 
-    // Free sides (sides of edges whose valence is not 2), numbered edge by edge.
-    std::vector<std::uint32_t> free_base(ne, kNone);
+    // Free sides (sides of edges whose valence is not 2), numbered edge by edge: free_edges
+    // lists those edges in increasing order, free_base[k] the number of free sides before
+    // free_edges[k].
+    std::vector<std::uint32_t> free_edges, free_base;
     std::uint32_t num_free = 0;
     for (std::size_t e = 0; e < ne; ++e)
       if (adj.edge_valence(e) != 2) {
-        free_base[e] = num_free;
+        free_edges.push_back(static_cast<std::uint32_t>(e));
+        free_base.push_back(num_free);
         num_free += adj.edge_valence(e);
       }
     auto free_index = [&](std::uint32_t s) {
       const std::uint32_t e = adj.side_edge[s];
+      const auto k = std::lower_bound(free_edges.begin(), free_edges.end(), e) - free_edges.begin();
       std::uint32_t i = adj.edge_offset[e];
       while (adj.edge_sides[i] != s) ++i;
-      return free_base[e] + (i - adj.edge_offset[e]);
+      return free_base[static_cast<std::size_t>(k)] + (i - adj.edge_offset[e]);
     };
     // partner[2f + end] = 2g + end_g: at the vertex where free side f has its end `end`
     // (0 = start, 1 = end), the boundary continues along free side g.
@@ -341,10 +345,9 @@ TopologyReport topology(const Mesh& mesh, const MetricsOptions& options) {
     // Boundary cycles.
     std::vector<std::uint8_t> visited(num_free, 0);
     std::vector<std::uint32_t> free_side(num_free);
-    for (std::size_t e = 0; e < ne; ++e)
-      if (free_base[e] != kNone)
-        for (std::uint32_t i = 0; i < adj.edge_valence(e); ++i)
-          free_side[free_base[e] + i] = adj.edge_sides[adj.edge_offset[e] + i];
+    for (std::size_t k = 0; k < free_edges.size(); ++k)
+      for (std::uint32_t i = 0; i < adj.edge_valence(free_edges[k]); ++i)
+        free_side[free_base[k] + i] = adj.edge_sides[adj.edge_offset[free_edges[k]] + i];
     for (std::uint32_t f0 = 0; f0 < num_free; ++f0) {
       if (visited[f0]) continue;
       bool has_boundary_edge = false;
