@@ -96,6 +96,8 @@ int cmd_extract(const Argv& argv) {
   }
   progress.finish();
   timings["read"] = clock.lap();
+  nlohmann::json rss;  // peak RSS (MiB) at the end of each stage: where the memory goes
+  rss["read"] = peak_rss_mb();
 
   progress.stage("surfels");
   SurfelOptions so;
@@ -103,12 +105,14 @@ int cmd_extract(const Argv& argv) {
   const SurfelComplex sc = build_surfels(*in.volume, iso, in.inside_sign, so);
   progress.finish();
   timings["surfels"] = clock.lap();
+  rss["surfels"] = peak_rss_mb();
   if (sc.num_surfels() == 0) fail_input(spec, "no surface at iso-value " + std::to_string(iso));
 
   progress.stage("graph");
   const ConnectivityGraph g = build_graph(sc);
   progress.finish();
   timings["graph"] = clock.lap();
+  rss["graph"] = peak_rss_mb();
 
   SimplifyOptions opt;
   opt.threads = nthreads;
@@ -130,11 +134,13 @@ int cmd_extract(const Argv& argv) {
   clock.lap();
   timings["disk_cover"] = stats.time_disk_cover_s;
   timings["voronoi"] = stats.time_voronoi_s;
+  rss["covering"] = peak_rss_mb();
 
   progress.stage("dual");
   BaseMesh base = build_base_mesh(sc, g, cov, in.field.get(), opt, std::move(stats));
   progress.finish();
   timings["dual"] = clock.lap();
+  rss["dual"] = peak_rss_mb();
 
   progress.stage("write");
   if (auto path = args.get("--base")) {
@@ -188,6 +194,7 @@ int cmd_extract(const Argv& argv) {
     r["warnings"] = st.warnings;
     r["timings_s"] = timings;
     r["peak_rss_mb"] = peak_rss_mb();
+    r["peak_rss_after_mb"] = rss;
     write_file_atomically(
         *path, [&](std::ostream& o) { o << std::setw(2) << r << "\n"; }, false);
   }
