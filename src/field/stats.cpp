@@ -5,12 +5,12 @@
 //  * 8/16-bit integers: one exact histogram over the type's whole range gives everything.
 //  * other types: pass 1 = min, max, sum, NaN/Inf count. Integer data whose range is < 65536
 //    then gets one exact histogram pass. Otherwise a 65536-bin histogram over [min, max] (also
-//    used for Otsu) that records each bin's smallest and largest member locates each percentile;
-//    up to 4 refinement passes then histogram (4096 bins) only the samples inside each
-//    percentile's current interval = [smallest, largest member] of the bin it fell in. A
-//    percentile is exact as soon as that interval holds a single value (outliers cannot spoil
-//    this: the interval shrinks to the members' range at every level). Otherwise the interval's
-//    midpoint is reported and its half width is the error bound.
+//    used for Otsu) locates each percentile's bin; up to 4 refinement passes then histogram
+//    (4096 bins, recording each sub-bin's smallest and largest member) only the samples inside
+//    each percentile's current interval, and the next interval is the member range of the
+//    sub-bin holding the rank. A percentile is exact as soon as that range is a single value;
+//    since the range shrinks to the members at every level, outliers cannot stall this. If the
+//    passes run out, the range's midpoint is reported and its half width is the error bound.
 // Otsu: N. Otsu, "A threshold selection method from gray-level histograms", IEEE Trans. SMC 9(1),
 // 1979 — maximise w0·w1·(m0 − m1)² over the thresholds between histogram bins.
 #include "adamesh/stats.h"
@@ -20,6 +20,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <type_traits>
 #include <vector>
@@ -55,16 +56,24 @@ std::int64_t nearest_rank(double level, std::int64_t n) {
   return std::max<std::int64_t>(1, (l * n + 99) / 100);
 }
 
-/// K bins over [a, c]: bin b = [edge(b), edge(b+1)), the last one closed. Bin lookup is exactly
-/// consistent with edge() (monotone std::lerp plus a correction step), so nested bins never lose
-/// or double-count a sample.
+/// k bins over [a, c] (a < c): bin b = [edge(b), edge(b+1)), the last one closed. Edges are a
+/// monotone function of b and bin() corrects its estimate against them, so bin membership is
+/// exactly consistent with edge(): nested bins never lose or double-count a sample. All
+/// arithmetic is on halved values, so no difference overflows even for ±DBL_MAX data.
 struct Bins {
-  double a = 0, c = 0;
+  double a = 0, c = 0, ah = 0, wh = 0, inv = 0;
   int k = 1;
-  double edge(int b) const { return b >= k ? c : std::lerp(a, c, double(b) / k); }
+  Bins() = default;
+  Bins(double lo, double hi, int bins)
+      : a(lo), c(hi), ah(0.5 * lo), wh((0.5 * hi - 0.5 * lo) / bins), inv(wh > 0 ? 1 / wh : 0), k(bins) {}
+  double edge(int b) const {
+    if (b <= 0) return a;
+    if (b >= k) return c;
+    return std::clamp(2 * (ah + b * wh), a, c);
+  }
   int bin(double v) const {
-    const double t = (0.5 * v - 0.5 * a) / (0.5 * c - 0.5 * a);  // halves: no overflow
-    int b = t >= 0 ? static_cast<int>(std::min(t * k, double(k - 1))) : 0;
+    const double t = (0.5 * v - ah) * inv;
+    int b = t > 0 ? (t < k - 1 ? static_cast<int>(t) : k - 1) : 0;
     while (b > 0 && v < edge(b)) --b;
     while (b < k - 1 && v >= edge(b + 1)) ++b;
     return b;
@@ -192,56 +201,89 @@ Pass1 pass1(const T* v, std::int64_t n) {
   return r;
 }
 
-/// Histogram over Bins that also records the smallest and largest member of each bin.
-struct RangeHist {
-  std::vector<std::int64_t> count;
-  std::vector<double> lo, hi;
-  explicit RangeHist(int k = 0) : count(k, 0), lo(k, INFINITY), hi(k, -INFINITY) {}
-  void add(int b, double d) {
-    ++count[b];
-    lo[b] = std::min(lo[b], d);
-    hi[b] = std::max(hi[b], d);
-  }
-  void merge(const RangeHist& o) {
-    for (std::size_t b = 0; b < count.size(); ++b) {
-      count[b] += o.count[b];
-      lo[b] = std::min(lo[b], o.lo[b]);
-      hi[b] = std::max(hi[b], o.hi[b]);
-    }
-  }
-};
-
-/// One percentile being narrowed down: the rank-th smallest of the samples in [lo, hi], where
-/// [lo, hi] is the range of the members of the bin it was found in (so membership is exact).
+/// One percentile being narrowed down: the rank-th smallest of the finite samples v with
+/// lo ≤ v ≤ hi (v < hi when open_hi).
 struct Target {
   std::int64_t rank = 0;
   double lo = 0, hi = 0;
-  bool done() const { return lo == hi; }
-  /// Moves into bin b of h (bins over [lo, hi]).
-  void descend(const RangeHist& h) {
-    std::int64_t below = 0;
-    const int b = find_rank(h.count, rank, below);
-    rank -= below;
-    lo = h.lo[b];
-    hi = h.hi[b];
-  }
+  bool open_hi = false;
+  bool done() const { return lo == hi && !open_hi; }
 };
 
-/// k-bin histogram of the finite samples; bin(d) gives the bin of d, or -1 to skip it.
-template <class T, class Bin>
-RangeHist range_histogram(const T* v, std::int64_t n, int k, Bin bin) {
-  tbb::enumerable_thread_specific<RangeHist> local([k] { return RangeHist(k); });
+/// Count-only histogram of the finite samples over `bins` (level 0).
+template <class T>
+std::vector<std::int64_t> value_histogram(const T* v, std::int64_t n, const Bins& bins) {
+  tbb::enumerable_thread_specific<std::vector<std::int64_t>> local(
+      [&] { return std::vector<std::int64_t>(bins.k, 0); });
   for_blocks(n, [&](std::int64_t, std::int64_t b, std::int64_t e) {
     auto& h = local.local();
+    const Bins bb = bins;
+    for (std::int64_t i = b; i < e; ++i)
+      if (finite(v[i])) ++h[bb.bin(static_cast<double>(v[i]))];
+  });
+  std::vector<std::int64_t> h(bins.k, 0);
+  for (const auto& l : local)
+    for (int i = 0; i < bins.k; ++i) h[i] += l[i];
+  return h;
+}
+
+/// Per-thread state of a refinement pass: for each of up to kLevels disjoint intervals, a
+/// kRefineBins histogram plus each sub-bin's smallest and largest member.
+struct RefineHist {
+  std::vector<std::int64_t> count;
+  std::vector<double> lo, hi;
+  explicit RefineHist(int intervals)
+      : count(intervals * kRefineBins, 0),
+        lo(intervals * kRefineBins, INFINITY),
+        hi(intervals * kRefineBins, -INFINITY) {}
+};
+
+/// One refinement pass for the distinct unresolved intervals `iv` (disjoint: bins of one level;
+/// sorted by lo).
+template <class T>
+RefineHist refine_pass(const T* v, std::int64_t n, const std::vector<Target>& iv) {
+  const int m = static_cast<int>(iv.size());
+  // The intervals are disjoint and sorted by lo: the candidate for d is the last one with
+  // lo ≤ d, found by counting (a fixed number of compares the compiler vectorises; unused
+  // slots have lo = +inf). A branchy scan mispredicted badly on random data.
+  constexpr int kSlots = 8;
+  std::array<Bins, kSlots> bins{};
+  std::array<double, kSlots> lo, hi;
+  std::array<bool, kSlots> open{};
+  lo.fill(INFINITY);
+  hi.fill(-INFINITY);
+  for (int o = 0; o < m; ++o) {
+    bins[o] = Bins(iv[o].lo, iv[o].hi, kRefineBins);
+    lo[o] = iv[o].lo;
+    hi[o] = iv[o].hi;
+    open[o] = iv[o].open_hi;
+  }
+  tbb::enumerable_thread_specific<RefineHist> local([m] { return RefineHist(m); });
+  for_blocks(n, [&](std::int64_t, std::int64_t b, std::int64_t e) {
+    RefineHist& h = local.local();
+    const auto lo_ = lo, hi_ = hi;  // local copies: no aliasing with the histogram stores
+    const auto open_ = open;
     for (std::int64_t i = b; i < e; ++i) {
-      if (!finite(v[i])) continue;
-      const double d = static_cast<double>(v[i]);
-      if (const int k = bin(d); k >= 0) h.add(k, d);
+      const double d = static_cast<double>(v[i]);  // NaN/Inf are in no interval
+      int count = 0;
+      for (int o = 0; o < kSlots; ++o) count += d >= lo_[o];
+      if (count == 0) continue;
+      const int o = count - 1;
+      if (!(d <= hi_[o]) || (open_[o] && d == hi_[o])) continue;
+      const int k = o * kRefineBins + bins[o].bin(d);
+      ++h.count[k];
+      h.lo[k] = std::min(h.lo[k], d);
+      h.hi[k] = std::max(h.hi[k], d);
     }
   });
-  RangeHist h(k);
-  for (const auto& l : local) h.merge(l);
-  return h;
+  RefineHist r(m);
+  for (const auto& l : local)
+    for (std::size_t k = 0; k < r.count.size(); ++k) {
+      r.count[k] += l.count[k];
+      r.lo[k] = std::min(r.lo[k], l.lo[k]);
+      r.hi[k] = std::max(r.hi[k], l.hi[k]);
+    }
+  return r;
 }
 
 template <class T>
@@ -265,53 +307,52 @@ void general_stats(const T* v, std::int64_t n, VolumeStats& s) {
     return;
   }
   // Level 0: kBins bins over [min, max], shared by all percentiles and by Otsu.
-  const Bins top{p.min, p.max, kBins};
-  const RangeHist h0 = range_histogram(v, n, kBins, [&](double d) { return top.bin(d); });
+  const Bins top(p.min, p.max, kBins);
+  const std::vector<std::int64_t> h0 = value_histogram(v, n, top);
   int k1 = 0, k2 = 0;
-  s.otsu = otsu_plateau(h0.count, [&](int b) { return 0.5 * (top.edge(b) + top.edge(b + 1)); }, k1, k2)
+  s.otsu = otsu_plateau(h0, [&](int b) { return 0.5 * (top.edge(b) + top.edge(b + 1)); }, k1, k2)
                ? 0.5 * (top.edge(k1 + 1) + top.edge(k2 + 1))
                : p.min;
-  Target t[kLevels];
+  std::array<Target, kLevels> t;
   for (std::size_t q = 0; q < kLevels; ++q) {
-    t[q].rank = nearest_rank(VolumeStats::kPercentileLevels[q], p.finite);
-    t[q].descend(h0);
+    std::int64_t below = 0;
+    const std::int64_t rank = nearest_rank(VolumeStats::kPercentileLevels[q], p.finite);
+    const int b = find_rank(h0, rank, below);
+    t[q] = Target{rank - below, top.edge(b), top.edge(b + 1), b < kBins - 1};
   }
-  // Refinement: one pass serves every unresolved percentile (targets in the same bin share it).
+  // Refinement: each pass histograms the members of every unresolved interval (percentiles in
+  // the same interval share it) and moves each percentile to the member range of its sub-bin.
   for (int pass = 0; pass < kRefinePasses; ++pass) {
-    std::vector<std::size_t> todo;  // distinct unresolved intervals
-    for (std::size_t q = 0; q < kLevels; ++q) {
-      bool dup = t[q].done();
-      for (std::size_t o : todo) dup = dup || (t[o].lo == t[q].lo && t[o].hi == t[q].hi);
-      if (!dup) todo.push_back(q);
-    }
-    if (todo.empty()) break;
-    std::vector<Bins> bins;  // bins[o] covers the interval [t[todo[o]].lo, t[todo[o]].hi]
-    for (std::size_t o : todo) bins.push_back(Bins{t[o].lo, t[o].hi, kRefineBins});
-    const int m = static_cast<int>(todo.size());
-    // Intervals are disjoint or equal (nested bins of one histogram level), so each sample falls
-    // into at most one; the combined histogram stacks the m sub-histograms.
-    const RangeHist h = range_histogram(v, n, m * kRefineBins, [&](double d) {
-      for (int o = 0; o < m; ++o)
-        if (d >= bins[o].a && d <= bins[o].c) return o * kRefineBins + bins[o].bin(d);
-      return -1;
-    });
+    std::vector<Target> iv;
+    std::array<int, kLevels> slot{};
     for (std::size_t q = 0; q < kLevels; ++q) {
       if (t[q].done()) continue;
-      int o = 0;  // (t[todo[o]] may already have descended: compare with the saved bins)
-      while (!(bins[o].a == t[q].lo && bins[o].c == t[q].hi)) ++o;
-      RangeHist sub(kRefineBins);
-      for (int b = 0; b < kRefineBins; ++b) {
-        sub.count[b] = h.count[o * kRefineBins + b];
-        sub.lo[b] = h.lo[o * kRefineBins + b];
-        sub.hi[b] = h.hi[o * kRefineBins + b];
-      }
-      t[q].descend(sub);
+      int o = 0;
+      while (o < int(iv.size()) && !(iv[o].lo == t[q].lo && iv[o].hi == t[q].hi)) ++o;
+      if (o == int(iv.size())) iv.push_back(t[q]);
+      slot[q] = o;
+    }
+    if (iv.empty()) break;
+    std::sort(iv.begin(), iv.end(), [](const Target& x, const Target& y) { return x.lo < y.lo; });
+    for (std::size_t q = 0; q < kLevels; ++q) {
+      if (t[q].done()) continue;
+      slot[q] = 0;
+      while (!(iv[slot[q]].lo == t[q].lo && iv[slot[q]].hi == t[q].hi)) ++slot[q];
+    }
+    const RefineHist h = refine_pass(v, n, iv);
+    for (std::size_t q = 0; q < kLevels; ++q) {
+      if (t[q].done()) continue;
+      const std::size_t off = std::size_t(slot[q]) * kRefineBins;
+      const std::vector<std::int64_t> sub(h.count.begin() + off, h.count.begin() + off + kRefineBins);
+      std::int64_t below = 0;
+      const int b = find_rank(sub, t[q].rank, below);
+      t[q] = Target{t[q].rank - below, h.lo[off + b], h.hi[off + b], false};
     }
   }
   s.percentile_error = 0;
   for (std::size_t q = 0; q < kLevels; ++q) {
     s.percentiles[q] = t[q].done() ? t[q].lo : 0.5 * t[q].lo + 0.5 * t[q].hi;
-    s.percentile_error = std::max(s.percentile_error, 0.5 * t[q].hi - 0.5 * t[q].lo);
+    if (!t[q].done()) s.percentile_error = std::max(s.percentile_error, 0.5 * t[q].hi - 0.5 * t[q].lo);
   }
 }
 
