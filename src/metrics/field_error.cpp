@@ -6,14 +6,15 @@
 //   ε_n       Σ_T A(T) (1 − n(T)·m(T)) / Σ_T A(T), n the unit triangle normal and m the unit
 //             outward field normal −inside_sign·∇f/|∇f| at the centroid.
 // A projection that does not converge, or that ends more than 4× the first-order distance away,
-// falls back to |signed_distance| (capped at the larger of the mesh's and the field domain's
-// diagonals) and is counted in `unconverged`.
+// is replaced by the nearest surface crossing on short lines through the point (along the
+// triangle normal and the gradient), else by |signed_distance|, and counted in `unconverged`.
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 
 #include "adamesh/metrics.h"
 #include "metrics/adjacency.h"
@@ -23,6 +24,34 @@
 #include "metrics/sampling.h"
 
 namespace adamesh {
+
+namespace {
+
+/// The field with its gradient replaced by central differences of its values (step h). For a
+/// sampled field this is the derivative of the trilinear interpolant itself, which keeps the
+/// Newton steps on the sheet of the surface nearest to the point; the field's own gradient
+/// (interpolated central differences of the samples) can point elsewhere in thin structures.
+class DifferencedField : public ScalarField {
+ public:
+  DifferencedField(const ScalarField& f, double h) : f_(f), h_(h) {}
+  double value(const Vec3& p) const override { return f_.value(p); }
+  Vec3 gradient(const Vec3& p) const override {
+    Vec3 g;
+    for (int k = 0; k < 3; ++k) {
+      Vec3 e{};
+      e[k] = h_;
+      g[k] = (f_.value(p + e) - f_.value(p - e)) / (2 * h_);
+    }
+    return g;
+  }
+  Box domain() const override { return f_.domain(); }
+
+ private:
+  const ScalarField& f_;
+  double h_;
+};
+
+}  // namespace
 
 FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double iso,
                              const FieldErrorOptions& opt) {
@@ -47,20 +76,76 @@ FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double 
     }
     po.max_step = std::max(po.max_step, po.tolerance);
     const double cap = scale > 0 ? scale : 1.0;
+    // Distances are measured on exact derivatives: the field's own gradient when analytic, else
+    // differences of its values.
+    const DifferencedField differenced(field, 1e-6 * cap);
+    const ScalarField& mf = field.is_analytic() ? field : differenced;
 
-    // A projection is used when it converged and stayed near: no farther than kFarFactor times
-    // the first-order distance |f − iso|/|∇f| (plus the tolerance). Longer paths mean the
-    // Newton steps left the nearby sheet (e.g. a sampled field's gradient pointing away from the
-    // closest crossing); then, as for non-convergence, the first-order distance is used.
-    constexpr double kFarFactor = 4;
+    // Nearest crossing of f = iso on the segment p ± R·u: scanned outwards at t = R·(k/kScan)²
+    // on each side (fine near p, where thin features matter), the first sign change refined by
+    // bisection. +inf when there is none.
+    constexpr int kScan = 24;
+    auto line_crossing = [&](const Vec3& p, const Vec3& u, double f0, double R) {
+      double best = std::numeric_limits<double>::infinity();
+      if (!(norm2(u) > 0) || f0 == 0) return f0 == 0 ? 0.0 : best;
+      for (const double side : {1.0, -1.0}) {
+        double t0 = 0, v0 = f0;
+        for (int k = 1; k <= kScan; ++k) {
+          const double t1 = side * R * (double(k) / kScan) * (double(k) / kScan);
+          const double v1 = mf.value(p + t1 * u) - iso;
+          if (!std::isfinite(v1)) break;
+          if ((v0 < 0) != (v1 < 0) || v1 == 0) {
+            double a = t0, b = t1, va = v0;
+            for (int it = 0; it < 60 && std::abs(b - a) > po.tolerance; ++it) {
+              const double m = 0.5 * (a + b), vm = mf.value(p + m * u) - iso;
+              if ((vm < 0) == (va < 0) && vm != 0) {
+                a = m;
+                va = vm;
+              } else {
+                b = m;
+              }
+            }
+            best = std::min(best, std::abs(b));
+            break;
+          }
+          t0 = t1;
+          v0 = v1;
+        }
+      }
+      return best;
+    };
+    // Distance of p to the surface. The Newton projection is taken when it converged and stayed
+    // near: no farther than kFarFactor × the first-order distance |f − iso|/|∇f| (plus the
+    // tolerance). Otherwise (no convergence, or the steps left the nearby sheet, as a sampled
+    // field's interpolated gradient can make them do) the distance is the nearest surface point
+    // among the converged projection and the crossings on the lines through p along `normal`
+    // (the triangle's normal; may be zero) and along ∇f(p), up to kSearch steps away; every
+    // candidate is a point of the surface, so the result is an upper bound. With no candidate
+    // the first-order distance is used. Both cases are counted in `unconverged`.
+    constexpr double kFarFactor = 4, kSearch = 4;
     std::atomic<std::int64_t> unconverged{0};
-    auto dist = [&](const Vec3& p) {
-      const double sd = std::abs(signed_distance(field, iso, p, cap));
-      const ProjectResult pr = project_to_iso(field, iso, p, po);
+    auto dist = [&](const Vec3& p, const Vec3& normal) {
+      const double f0 = mf.value(p) - iso;
+      const Vec3 g = mf.gradient(p);
+      const double gl = norm(g);
+      double sd = f0 == 0 ? 0.0 : (gl > 0 && std::isfinite(gl) ? std::abs(f0) / gl : cap);
+      if (!std::isfinite(sd)) sd = cap;  // NaN field values: count as far away
+      sd = std::min(sd, cap);
+      const ProjectResult pr = project_to_iso(mf, iso, p, po);
       const double d = distance(pr.point, p);
       if (pr.converged && d <= kFarFactor * sd + po.tolerance) return d;
       unconverged.fetch_add(1, std::memory_order_relaxed);
-      return std::isfinite(sd) ? sd : cap;  // NaN field values: count as far away
+      if (!std::isfinite(f0)) return cap;
+      const double R = std::max(kSearch * po.max_step, std::min(2 * sd, cap));
+      double best = pr.converged ? d : std::numeric_limits<double>::infinity();
+      best = std::min(best, line_crossing(p, normal, f0, R));
+      if (gl > 0 && std::isfinite(gl)) best = std::min(best, line_crossing(p, g / gl, f0, R));
+      return std::isfinite(best) ? best : sd;
+    };
+
+    auto normal_of = [&](std::size_t t) {
+      const Vec3 a = mesh.vertex(tri[3 * t]);
+      return normalized(cross(mesh.vertex(tri[3 * t + 1]) - a, mesh.vertex(tri[3 * t + 2]) - a));
     };
 
     // Distances of the sample points and vertices.
@@ -71,13 +156,13 @@ FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 256), [&](const auto& rg) {
       for (std::size_t t = rg.begin(); t != rg.end(); ++t)
         for (std::uint64_t g = layout.first[t]; g < layout.first[t + 1]; ++g)
-          d[g] = dist(detail::sample_point(mesh, t, g));
+          d[g] = dist(detail::sample_point(mesh, t, g), normal_of(t));
     });
     const std::vector<std::uint32_t> verts = detail::referenced_vertices(mesh);
     const double vmax = tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, verts.size(), 1024), 0.0,
         [&](const auto& rg, double m) {
-          for (std::size_t i = rg.begin(); i != rg.end(); ++i) m = std::max(m, dist(mesh.vertex(verts[i])));
+          for (std::size_t i = rg.begin(); i != rg.end(); ++i) m = std::max(m, dist(mesh.vertex(verts[i]), Vec3{}));
           return m;
         },
         [](double a, double b) { return std::max(a, b); });
@@ -116,7 +201,7 @@ FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double 
       double w = 0;
       for (std::uint32_t i = 0; i < adj.edge_valence(e); ++i) w += 0.5 * area[es[i] / 3];
       if (w == 0) return 0.0;
-      const double dm = dist(mid);
+      const double dm = dist(mid, normal_of(es[0] / 3));
       return dm * dm * w;
     });
 
