@@ -32,7 +32,9 @@ struct MeshWriteOptions {
 /// Writes atomically (temporary file + rename). Throws Error(output_failed, "<path>: ...").
 void write_mesh(const Mesh& mesh, const std::string& path, const MeshWriteOptions& options = {});
 
-/// Reads PLY (ASCII/binary), OBJ or OFF. Polygons are fan-triangulated.
+/// Reads PLY (ASCII/binary), OBJ, OFF or STL (binary/ASCII; corners with identical positions
+/// merged). Format from the extension, else from the first bytes. Polygons are fan-triangulated.
+/// Throws Error(invalid_input, "<path>: <problem>") on missing, truncated or inconsistent files.
 Mesh read_mesh(const std::string& path);
 
 }  // namespace adamesh
