@@ -67,8 +67,10 @@ struct ProjectResult {
 };
 
 /// Newton projection p ← p − (f(p) − iso) ∇f/|∇f|² with safeguards: step length capped, flat
-/// gradients (|∇f| tiny) stop the iteration, a sign change along a step is resolved by bisection
-/// along the step, and the result never has a larger residual than the start point.
+/// gradients (|∇f| zero, or a Newton distance beyond 1e6 domain diagonals) stop the iteration, a
+/// sign change along a step is resolved by bisection along the step, and the result is the
+/// iterate with the smallest residual (never larger than the start point's). With a plane
+/// constraint the step is the Newton step along the in-plane part of ∇f.
 ProjectResult project_to_iso(const ScalarField& f, double iso, const Vec3& p,
                              const ProjectOptions& opt = {});
 
