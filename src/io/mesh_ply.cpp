@@ -40,7 +40,9 @@ void write_ply(const Mesh& m, std::ostream& os, const MeshWriteOptions& opt) {
   }
   out.text("element face ");
   out.number(static_cast<std::int64_t>(nt));
-  out.text("\nproperty list uchar int vertex_indices\nend_header\n");
+  // `int` as everyone reads it; `uint` only when indices would not fit (2^31 vertices and up).
+  out.text(nv > 0x7fffffffu ? "\nproperty list uchar uint vertex_indices\nend_header\n"
+                            : "\nproperty list uchar int vertex_indices\nend_header\n");
 
   if (opt.ascii) {
     for (std::size_t v = 0; v < nv; ++v) {
@@ -91,7 +93,7 @@ void write_ply(const Mesh& m, std::ostream& os, const MeshWriteOptions& opt) {
     for (std::size_t t = 0; t < nt; ++t) {
       char face[13];
       face[0] = 3;
-      std::memcpy(face + 1, &m.triangles[3 * t], 12);  // uint32 < 2^31 in practice; stored as int
+      std::memcpy(face + 1, &m.triangles[3 * t], 12);  // int (or uint) little-endian
       out.bytes(face, sizeof face);
     }
   }
