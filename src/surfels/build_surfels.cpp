@@ -28,6 +28,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <type_traits>
 
 #include "adamesh/error.h"
 #include "adamesh/surfels.h"
@@ -60,7 +61,8 @@ class Extractor {
         origin_(v.grid.origin),
         to_world_(v.grid.index_to_world_matrix()),
         mirrored_(to_world_.determinant() < 0),
-        table_(detail::cell_table()) {
+        table_(detail::cell_table()),
+        thr_(make_threshold(iso, inside_sign > 0)) {
     const auto& edges = detail::cube_edges();
     for (int e = 0; e < 12; ++e) {
       const auto& ce = edges[e];
@@ -131,36 +133,87 @@ class Extractor {
  private:
   double value(std::int64_t lin) const { return sgn_ * (static_cast<double>(data_[lin]) - iso_); }
 
+  /// Signs of plane k: s[p] = 1 when positive. Compares in the sample type against the exact
+  /// threshold (see Threshold), so the loop vectorises.
   void classify(std::int64_t k, std::uint8_t* s) const {
-    const T* src = data_ + k * plane_;
-    const double iso = iso_;
+    // Locals and restrict: uint8_t stores may alias anything, members included.
+    const T* __restrict src = data_ + k * plane_;
+    std::uint8_t* __restrict out = s;
+    const std::int64_t n = plane_;
+    if (thr_.constant >= 0) {
+      std::memset(out, thr_.constant, static_cast<std::size_t>(n));
+      return;
+    }
+    const T t = thr_.value;
     if (sgn_ > 0) {
-      for (std::int64_t p = 0; p < plane_; ++p) s[p] = static_cast<double>(src[p]) >= iso;
+      for (std::int64_t p = 0; p < n; ++p) out[p] = src[p] >= t;
     } else {
-      for (std::int64_t p = 0; p < plane_; ++p) s[p] = static_cast<double>(src[p]) <= iso;
+      for (std::int64_t p = 0; p < n; ++p) out[p] = src[p] <= t;
     }
   }
 
+  /// For samples of type T: f ≥ iso ⇔ f ≥ value (inside_sign +1), f ≤ iso ⇔ f ≤ value (−1),
+  /// exactly as the comparison of double(f) with iso. `constant` is 0/1 when no sample value
+  /// can be on the other side (threshold outside T's range), else −1.
+  struct Threshold {
+    T value{};
+    int constant = -1;
+  };
+
+  static Threshold make_threshold(double iso, bool ge) {
+    Threshold t;
+    if constexpr (std::is_integral_v<T>) {
+      const double r = ge ? std::ceil(iso) : std::floor(iso);
+      const double lo = static_cast<double>(std::numeric_limits<T>::min());
+      const double hi = static_cast<double>(std::numeric_limits<T>::max());
+      if (r > hi) t.constant = ge ? 0 : 1;
+      else if (r < lo) t.constant = ge ? 1 : 0;
+      else t.value = static_cast<T>(r);
+    } else if constexpr (std::is_same_v<T, float>) {
+      float f = static_cast<float>(iso);  // nearest; step to the closest float on iso's side
+      if (ge && static_cast<double>(f) < iso) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+      if (!ge && static_cast<double>(f) > iso) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+      t.value = f;
+    } else {
+      t.value = static_cast<T>(iso);
+    }
+    return t;
+  }
+
   void quads(const std::uint8_t* s, std::uint8_t* q) const {
-    for (std::int64_t j = 0; j + 1 < ny_; ++j) {
-      const std::uint8_t* a = s + j * nx_;
-      const std::uint8_t* b = a + nx_;
-      std::uint8_t* out = q + j * nx_;
-      for (std::int64_t i = 0; i + 1 < nx_; ++i)
+    const std::int64_t nx = nx_, ny = ny_;
+    for (std::int64_t j = 0; j + 1 < ny; ++j) {
+      const std::uint8_t* __restrict a = s + j * nx;
+      const std::uint8_t* __restrict b = a + nx;
+      std::uint8_t* __restrict out = q + j * nx;
+      for (std::int64_t i = 0; i + 1 < nx; ++i)
         out[i] = static_cast<std::uint8_t>(a[i] | (a[i + 1] << 1) | (b[i] << 2) | (b[i + 1] << 3));
     }
+  }
+
+  /// Number of positions where two 0/1 byte arrays differ, 8 bytes at a time.
+  static std::int64_t count_differences(const std::uint8_t* a, const std::uint8_t* b,
+                                        std::int64_t n) {
+    std::int64_t c = 0, i = 0;
+    for (; i + 8 <= n; i += 8) {
+      std::uint64_t wa, wb;
+      std::memcpy(&wa, a + i, 8);
+      std::memcpy(&wb, b + i, 8);
+      // Bytes are 0/1: their sum is the top byte of the product (no popcnt on baseline x86-64).
+      c += static_cast<std::int64_t>(((wa ^ wb) * 0x0101010101010101ull) >> 56);
+    }
+    for (; i < n; ++i) c += a[i] ^ b[i];
+    return c;
   }
 
   std::int64_t count_plane_nodes(const std::uint8_t* s, const std::uint8_t* up) const {
     std::int64_t n = 0;
     for (std::int64_t j = 0; j < ny_; ++j) {
       const std::uint8_t* a = s + j * nx_;
-      for (std::int64_t i = 0; i + 1 < nx_; ++i) n += a[i] ^ a[i + 1];
-      if (j + 1 < ny_)
-        for (std::int64_t i = 0; i < nx_; ++i) n += a[i] ^ a[i + nx_];
+      n += count_differences(a, a + 1, nx_ - 1);               // x edges
+      if (j + 1 < ny_) n += count_differences(a, a + nx_, nx_);  // y edges
     }
-    if (up)
-      for (std::int64_t p = 0; p < plane_; ++p) n += s[p] ^ up[p];
+    if (up) n += count_differences(s, up, plane_);  // z edges
     return n;
   }
 
@@ -295,6 +348,7 @@ class Extractor {
   Mat3 to_world_;
   bool mirrored_;
   const detail::CellTable& table_;
+  Threshold thr_;
   std::int64_t edge_offset_[12];
   int edge_plane_[12];
   int edge_slot_[12];
