@@ -93,7 +93,7 @@ class LineReader {
     const std::size_t stop = end == std::string_view::npos ? data_.size() : end;
     line = data_.substr(pos_, stop - pos_);
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    pos_ = stop + 1;
+    pos_ = end == std::string_view::npos ? data_.size() : stop + 1;
     ++line_no_;
     return true;
   }
