@@ -20,13 +20,11 @@ double segment_distance2(const Vec3& p, const Vec3& a, const Vec3& b) {
 }
 
 double box_distance2(const Vec3& p, const float lo[3], const float hi[3]) {
-  double d2 = 0;
-  for (int k = 0; k < 3; ++k) {
-    const double x = p[k];
-    const double d = x < lo[k] ? lo[k] - x : (x > hi[k] ? x - hi[k] : 0.0);
-    d2 += d * d;
-  }
-  return d2;
+  // Branch-free: the larger of (lo − x), (x − hi) and 0 on each axis.
+  const double dx = std::max({double(lo[0]) - p.x, p.x - double(hi[0]), 0.0});
+  const double dy = std::max({double(lo[1]) - p.y, p.y - double(hi[1]), 0.0});
+  const double dz = std::max({double(lo[2]) - p.z, p.z - double(hi[2]), 0.0});
+  return dx * dx + dy * dy + dz * dz;
 }
 
 constexpr std::uint32_t kParallelBuild = 1 << 15;
