@@ -14,7 +14,7 @@
 //              (voxel (z,y,x) order, cycles in configuration order), node_fan slots, and in
 //              surfel_opposite the fan slot of the voxel across each segment's face.
 //   4. link:   per surfel, surfel_opposite = node_fan[node][slot]; c-vertex = mean of its nodes.
-// Node ids of a plane are found through a per-plane array [point][axis] -> id (no hashing).
+// Node ids of a plane are found through per-plane arrays (first id, edge mask) (no hashing).
 // The result depends only on the data: identical bytes for any thread count or slab split.
 #include <tbb/blocked_range.h>
 #include <tbb/info.h>
@@ -66,7 +66,8 @@ class Extractor {
     const auto& edges = detail::cube_edges();
     for (int e = 0; e < 12; ++e) {
       const auto& ce = edges[e];
-      edge_offset_[e] = 3 * (ce.lower[1] * nx_ + ce.lower[0]) + ce.axis;
+      edge_offset_[e] = ce.lower[1] * nx_ + ce.lower[0];
+      edge_axis_[e] = ce.axis;
       edge_plane_[e] = ce.lower[2];
       edge_slot_[e] = ce.quadrant;
     }
@@ -108,21 +109,19 @@ class Extractor {
     std::unique_ptr<std::uint8_t[]> s0(new std::uint8_t[plane_]), s1(new std::uint8_t[plane_]),
         s2(new std::uint8_t[plane_]);
     std::unique_ptr<std::uint8_t[]> q0(new std::uint8_t[plane_]), q1(new std::uint8_t[plane_]);
-    std::unique_ptr<std::uint32_t[]> m0(new std::uint32_t[3 * plane_]),
-        m1(new std::uint32_t[3 * plane_]);
+    PlaneIds m0(plane_), m1(plane_);
     classify(z0, s0.get());
     quads(s0.get(), q0.get());
     if (z0 + 1 < nz_) classify(z0 + 1, s1.get());
-    plane_nodes(z0, s0.get(), z0 + 1 < nz_ ? s1.get() : nullptr, node_base[z0], true, m0.get(),
-                out);
+    plane_nodes(z0, s0.get(), z0 + 1 < nz_ ? s1.get() : nullptr, node_base[z0], true, m0, out);
     for (std::int64_t k = z0; k < z1 && k + 1 < nz_; ++k) {
       // Invariant: s0/s1 = signs of planes k, k+1; q0 = quads of k; m0 = ids of plane k.
       const bool has2 = k + 2 < nz_;
       if (has2) classify(k + 2, s2.get());
       quads(s1.get(), q1.get());
-      plane_nodes(k + 1, s1.get(), has2 ? s2.get() : nullptr, node_base[k + 1], k + 1 < z1,
-                  m1.get(), out);
-      layer_surfels(k, q0.get(), q1.get(), m0.get(), m1.get(), surfel_base[k], entry_base[k], out);
+      plane_nodes(k + 1, s1.get(), has2 ? s2.get() : nullptr, node_base[k + 1], k + 1 < z1, m1,
+                  out);
+      layer_surfels(k, q0.get(), q1.get(), m0, m1, surfel_base[k], entry_base[k], out);
       std::swap(s0, s1);
       std::swap(s1, s2);
       std::swap(q0, q1);
@@ -131,6 +130,21 @@ class Extractor {
   }
 
  private:
+  /// Node ids of one plane, compactly (5 bytes per point instead of 12): the id of the point's
+  /// first node in key order and the mask of its sign-changing edges (bit = axis). The node on
+  /// edge (p, axis) is first[p] + number of mask bits below `axis`. Entries are written only at
+  /// points with nodes, the only ones ever looked up.
+  struct PlaneIds {
+    explicit PlaneIds(std::int64_t n) : first(new std::uint32_t[n]), mask(new std::uint8_t[n]) {}
+    std::unique_ptr<std::uint32_t[]> first;
+    std::unique_ptr<std::uint8_t[]> mask;
+    std::uint32_t id(std::int64_t p, int axis) const {
+      static constexpr std::uint8_t kRank[8][3] = {{0, 0, 0}, {0, 1, 1}, {0, 0, 0}, {0, 1, 2},
+                                                   {0, 0, 0}, {0, 1, 1}, {0, 0, 1}, {0, 1, 2}};
+      return first[p] + kRank[mask[p]][axis];
+    }
+  };
+
   double value(std::int64_t lin) const { return sgn_ * (static_cast<double>(data_[lin]) - iso_); }
 
   /// Signs of plane k: s[p] = 1 when positive. Compares in the sample type against the exact
@@ -265,11 +279,10 @@ class Extractor {
 
   /// Ids of plane k's nodes in key order (j, i, axis) into `ids`; writes the nodes when `write`.
   void plane_nodes(std::int64_t k, const std::uint8_t* s, const std::uint8_t* up, std::int64_t base,
-                   bool write, std::uint32_t* ids, SurfelComplex& out) const {
+                   bool write, PlaneIds& ids, SurfelComplex& out) const {
     auto id = static_cast<std::uint32_t>(base);
     const std::int64_t plane_lin = k * plane_;
     auto emit = [&](std::int64_t p, std::int64_t i, std::int64_t j, int axis) {
-      ids[3 * p + axis] = id;
       if (write) {
         const std::int64_t lin0 = plane_lin + p;
         const std::int64_t lin1 = lin0 + (axis == 0 ? 1 : (axis == 1 ? nx_ : plane_));
@@ -309,6 +322,8 @@ class Extractor {
         const bool ey = si != b[i];
         const bool ez = si != c[i];
         if (!(ex | ey | ez)) continue;
+        ids.first[row + i] = id;
+        ids.mask[row + i] = static_cast<std::uint8_t>(ex | (ey << 1) | (ez << 2));
         if (ex) emit(row + i, i, j, 0);
         if (ey) emit(row + i, i, j, 1);
         if (ez) emit(row + i, i, j, 2);
@@ -317,11 +332,11 @@ class Extractor {
   }
 
   void layer_surfels(std::int64_t k, const std::uint8_t* q0, const std::uint8_t* q1,
-                     const std::uint32_t* m0, const std::uint32_t* m1, std::int64_t surfel_base,
+                     const PlaneIds& m0, const PlaneIds& m1, std::int64_t surfel_base,
                      std::int64_t entry_base, SurfelComplex& out) const {
     auto s = static_cast<std::int32_t>(surfel_base);
     auto entry = static_cast<std::uint32_t>(entry_base);
-    const std::uint32_t* maps[2] = {m0, m1};
+    const PlaneIds* maps[2] = {&m0, &m1};
     for_active_voxels(q0, q1, [&](std::int64_t i, std::int64_t j, int c) {
       const std::int64_t p = j * nx_ + i;
       const CellConfig& cfg = table_.config(c, decisions(c, i, j, k), mirrored_);
@@ -332,7 +347,7 @@ class Extractor {
         out.surfel_voxel[s] = voxel;
         for (int n = 0; n < cfg.cycle_len[cy]; ++n, ++idx, ++entry) {
           const int e = cfg.edge[idx];
-          const std::uint32_t node = maps[edge_plane_[e]][3 * p + edge_offset_[e]];
+          const std::uint32_t node = maps[edge_plane_[e]]->id(p + edge_offset_[e], edge_axis_[e]);
           out.surfel_nodes[entry] = node;
           out.surfel_opposite[entry] = cfg.opposite_quadrant[idx];  // resolved in link pass
           out.node_fan[node][edge_slot_[e]] = s;
@@ -349,7 +364,8 @@ class Extractor {
   bool mirrored_;
   const detail::CellTable& table_;
   Threshold thr_;
-  std::int64_t edge_offset_[12];
+  std::int64_t edge_offset_[12];  // point offset of the edge's lower endpoint in its plane
+  int edge_axis_[12];
   int edge_plane_[12];
   int edge_slot_[12];
 };
