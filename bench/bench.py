@@ -22,6 +22,7 @@ import json
 import os
 import platform
 import re
+import resource
 import shutil
 import statistics
 import subprocess
@@ -69,6 +70,8 @@ def run(cmd, timeout=3600):
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
     except subprocess.TimeoutExpired:
         raise Failed(f"timed out after {timeout} s: {' '.join(cmd)}")
+    except OSError as e:
+        raise Failed(f"{cmd[0]}: {e}")
     if p.returncode != 0:
         err = (p.stderr.strip().splitlines() or ["(no message)"])[-1]
         raise Failed(f"exit {p.returncode}: {' '.join(cmd)}: {err}")
@@ -83,12 +86,23 @@ def median_of(values):
 class Tools:
     """The binaries of one build directory and what the CLI supports."""
 
-    def __init__(self, build):
+    def __init__(self, build, snapshot=None):
+        """snapshot: a directory to copy the binaries to first, so that a rebuild of `build`
+        during a long run (another `make`) cannot swap or break them halfway."""
         self.build = build
         self.adamesh = os.path.join(build, "apps", "adamesh", "adamesh")
         if not os.access(self.adamesh, os.X_OK):
             sys.exit(f"bench: {self.adamesh} not found: build first (make bench does)")
         self.bench_dir = os.path.join(build, "bench")
+        if snapshot:
+            os.makedirs(snapshot, exist_ok=True)
+            shutil.copy2(self.adamesh, os.path.join(snapshot, "adamesh"))
+            self.adamesh = os.path.join(snapshot, "adamesh")
+            for name in ("peer_meshopt", "peer_vtk", "peer_cgal", "surfels_bench",
+                         "kernels_bench", "refine_bench"):
+                if self.exe(name):
+                    shutil.copy2(self.exe(name), os.path.join(snapshot, name))
+            self.bench_dir = snapshot
         help_extract = run([self.adamesh, "extract", "--help"])
         help_main = run([self.adamesh, "--help"])
         self.can_budget = "--triangles" in help_extract
@@ -192,9 +206,14 @@ def extract(tools, inp, work, threads, budget=None, levels=None, hierarchy=None,
         cmd += ["-o", out, "--levels", str(levels)]
         if hierarchy:
             cmd += ["--hierarchy", hierarchy]
+    before, t0 = resource.getrusage(resource.RUSAGE_CHILDREN), time.time()
     run(cmd)
+    after, wall = resource.getrusage(resource.RUSAGE_CHILDREN), time.time() - t0
     r = json.load(open(report))
     r["_base_path"], r["_mesh_path"] = base, out
+    # CPU seconds per wall second of the whole process: about 1 when a second core was never
+    # used (or never free), up to 2 with both busy.
+    r["_cpu_per_wall"] = ((after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)) / wall
     return r
 
 
@@ -332,6 +351,7 @@ def measure_scaling(tools, inp, work, reps, budget=None):
         t = {st: median_of([r["timings_s"].get(st) for r in rs]) for st in STAGES
              if st in rs[-1]["timings_s"]}
         t["mc"] = median_of([mc(tools, inp, work, threads)["time_s"] for _ in range(reps)])
+        t["cpu_per_wall"] = median_of([r["_cpu_per_wall"] for r in rs])
         out[str(threads)] = t
     for f in os.listdir(work):
         if f.endswith(".ply"):
@@ -586,6 +606,10 @@ def generated_markdown(results, plots):
              f"wall time of the whole run {results['wall_s'] / 60:.1f} min"
              + (f" (a subset of the mode's inputs: `--only {results['only']}`)."
                 if results.get("only") else "."))
+    for m in results.get("merged", []):
+        L.append("")
+        L.append(f"Measured again on {m['date']} (load {m['loadavg']}, `{m['git']}`) and merged "
+                 f"in: {', '.join(m['inputs'])}.")
     L.append("")
     if not tools["can_budget"]:
         L.append("> **Adaptive meshes are not measured yet**: this build's `adamesh extract` has no "
@@ -704,24 +728,26 @@ def generated_markdown(results, plots):
     L.append("Parallel stages (oneTBB) in the current sources: " + ", ".join(PARALLEL_STAGES) +
              "; disk cover, Voronoi and dual are serial. Marching cubes (`adamesh mc`) is parallel "
              "in both its passes. Speed-up = time at 1 thread / time at 2 threads (median of the "
-             "repeats); on a shared, loaded machine it is a lower bound.")
+             "repeats); on a shared, loaded machine it is a lower bound. CPU s / wall s: CPU time "
+             "of the whole `adamesh extract` process per wall second (about 1 means the second "
+             "core did no work for it — serial stages, or no free core on a loaded machine).")
     L.append("")
     sc_inputs = [r for r in inputs if r.get("scaling")]
     if sc_inputs:
         cols = [s for s in STAGES + ["mc"] if any(s in r["scaling"]["1"] for r in sc_inputs)]
-        header = ["input", "threads"] + [f"{c} s" for c in cols] + ["pipeline s"]
+        header = ["input", "threads"] + [f"{c} s" for c in cols] + ["pipeline s", "CPU s / wall s"]
         rows = []
         for r in sc_inputs:
             for th in ("1", "2"):
                 t = r["scaling"][th]
                 pipe = sum(t.get(s) or 0 for s in STAGES if s not in ("read", "write"))
-                rows.append([r["name"], th] + [t.get(c) for c in cols] + [pipe])
+                rows.append([r["name"], th] + [t.get(c) for c in cols] + [pipe, t.get("cpu_per_wall")])
             t1, t2 = r["scaling"]["1"], r["scaling"]["2"]
             p1 = sum(t1.get(s) or 0 for s in STAGES if s not in ("read", "write"))
             p2 = sum(t2.get(s) or 0 for s in STAGES if s not in ("read", "write"))
             rows.append([r["name"], "speed-up"] +
                         [f"{ratio(t1.get(c), t2.get(c)):.2f}×" if ratio(t1.get(c), t2.get(c)) else "–"
-                         for c in cols] + [f"{ratio(p1, p2):.2f}×" if ratio(p1, p2) else "–"])
+                         for c in cols] + [f"{ratio(p1, p2):.2f}×" if ratio(p1, p2) else "–", ""])
         L.append(md_table(header, rows))
     L.append("")
 
@@ -904,9 +930,14 @@ def main():
     ap.add_argument("--replot", metavar="JSON",
                     help="no measurements: regenerate the plots and BENCHMARKS.md from a results file")
     ap.add_argument("--png", action="store_true", help="PNG plots (pngcairo) instead of SVG")
+    ap.add_argument("--merge", metavar="JSON",
+                    help="measure the selected inputs again and replace them in this results file "
+                         "(each input keeps its own run date and load); writes back to it")
     args = ap.parse_args()
 
-    tools = Tools(os.path.abspath(args.build))
+    build = os.path.abspath(args.build)
+    work_root = os.path.join(build, "bench-work")
+    tools = Tools(build, None if args.replot else os.path.join(work_root, "bin"))
     img_dir = os.path.join(os.path.dirname(os.path.abspath(args.md)), "img")
     ext = "png" if args.png else "svg"
     if args.replot:
@@ -921,7 +952,6 @@ def main():
         keep = set(args.only.split(","))
         inputs = [i for i in inputs if i.name in keep]
     reps = args.repeat or (1 if args.mode == "quick" else 3)
-    work_root = os.path.join(tools.build, "bench-work")
     started = time.time()
     log(f"bench: mode {args.mode}, {len(inputs)} inputs, build {tools.build}, "
         f"adaptive budgets {'on' if tools.can_budget else 'off (no --triangles yet)'}, peers: "
@@ -969,6 +999,8 @@ def main():
             f"RMS/d {a['stats']['distance']['rms_rel']:.2e}, MC {rec['mc']['triangles']} tris "
             f"{rec['mc']['time_s']:.3f} s, pipeline {a['time_s']:.3f} s, "
             f"peak {rec['extract']['peak_rss_mb']:.0f} MB ({rec['bench_wall_s']:.0f} s)")
+        rec["measured"] = {"date": results["date"], "loadavg": results["loadavg"],
+                           "git": results["git"]}
         results["inputs"].append(rec)
     if not args.no_micro:
         results["micro"] = micro_benchmarks(tools, args.mode)
@@ -978,9 +1010,20 @@ def main():
     os.makedirs(args.results, exist_ok=True)
     suffix = "-quick" if args.mode == "quick" else ("" if args.mode == "default" else "-full")
     jpath = os.path.join(args.results, f"{results['date']}{suffix}.json")
+    if args.merge:
+        old = json.load(open(args.merge))
+        fresh = {r["name"]: r for r in results["inputs"]}
+        merged = [fresh.pop(r["name"], r) for r in old["inputs"]] + list(fresh.values())
+        old.setdefault("merged", []).append({"date": results["date"], "loadavg": results["loadavg"],
+                                             "git": results["git"],
+                                             "inputs": [r["name"] for r in results["inputs"]]})
+        old["inputs"] = merged
+        if "micro" in results:
+            old["micro"] = results["micro"]
+        results, jpath = old, args.merge
     results["results_json"] = os.path.relpath(jpath, ROOT)
     with open(jpath + ".tmp", "w") as f:
-        json.dump(results, f, indent=1)
+        json.dump(results, f, separators=(",", ":"))
     os.replace(jpath + ".tmp", jpath)
     plots = make_plots(tools, results, img_dir, ext)
     shutil.rmtree(os.path.join(img_dir, ".data"), ignore_errors=True)

@@ -11,7 +11,7 @@
 // The mesher needs a closed surface inside a bounding sphere whose centre is inside the object:
 // the function is the field (negative inside) within the grid and positive outside it, so an
 // object cut by the grid's faces is closed by caps on them; the cap triangles (all three vertices
-// on one face of the grid) are removed afterwards, leaving the open surface marching cubes gives.
+// on the grid's faces) are removed afterwards, leaving the open surface marching cubes gives.
 // Writes DIR/cgal_<budget>.ply and prints the JSON line of peer_common.h.
 #include <CGAL/Complex_2_in_triangulation_3.h>
 #include <CGAL/Implicit_surface_3.h>
@@ -84,14 +84,18 @@ adamesh::Mesh mesh_surface(const Surface_3& surface, double r, const adamesh::Gr
     std::uint32_t v[3];
     int k = 0;
     for (auto h : CGAL::halfedges_around_face(sm.halfedge(f), sm)) v[k++] = index[sm.target(h).idx()];
-    bool cap = false;
-    for (int a = 0; a < 3 && !cap; ++a)
-      for (double face : {0.0, double(grid.dims[a] - 1)}) {
-        bool all_on = true;
-        for (int c = 0; c < 3; ++c)
-          all_on = all_on && std::abs(grid.to_index(all.vertex(v[c]))[a] - face) < tol;
-        cap = cap || all_on;
-      }
+    // A cap triangle has its three vertices on the grid's boundary (one face, or two faces
+    // where it wraps around an edge of the grid); the iso-surface's own triangles have at most
+    // their rim edge there.
+    bool cap = true;
+    for (int c = 0; c < 3 && cap; ++c) {
+      const adamesh::Vec3 ijk = grid.to_index(all.vertex(v[c]));
+      bool on_face = false;
+      for (int a = 0; a < 3; ++a)
+        on_face = on_face || std::abs(ijk[a]) < tol ||
+                  std::abs(ijk[a] - double(grid.dims[a] - 1)) < tol;
+      cap = on_face;
+    }
     if (!cap) tris.insert(tris.end(), {v[0], v[1], v[2]});
   }
   return peer::compact(all.positions, tris);

@@ -15,4 +15,7 @@ for a in "$@"; do
     *) args+=("$a") ;;
   esac
 done
-exec python3 bench/bench.py --mode "$mode" "${args[@]}"
+# Debian's python3 (standard library only), not whatever python3 comes first on PATH.
+py=/usr/bin/python3
+[ -x "$py" ] || py=python3
+exec "$py" bench/bench.py --mode "$mode" "${args[@]}"
