@@ -144,6 +144,22 @@ inline void expect_semi_regular(const CutMesh& cut, std::size_t num_base_vertice
   EXPECT_EQ(bad, 0);
 }
 
+/// Nesting: every vertex of `coarse` is a vertex of `fine` with identical coordinates.
+inline void expect_nested(const CutMesh& coarse, const CutMesh& fine, const std::string& label) {
+  std::size_t k = 0, missing = 0, moved = 0;
+  for (std::size_t i = 0; i < coarse.vertex_id.size(); ++i) {
+    while (k < fine.vertex_id.size() && fine.vertex_id[k] < coarse.vertex_id[i]) ++k;
+    if (k == fine.vertex_id.size() || fine.vertex_id[k] != coarse.vertex_id[i]) {
+      ++missing;
+      continue;
+    }
+    for (int c = 0; c < 3; ++c)
+      moved += fine.mesh.positions[3 * k + c] != coarse.mesh.positions[3 * i + c];
+  }
+  EXPECT_EQ(missing, 0u) << label;
+  EXPECT_EQ(moved, 0u) << label;
+}
+
 /// Median radius ratio and share of triangles with a minimum angle below 20°.
 struct ShapeFigures {
   double median_q = 0, pct_below_20 = 0, min_angle = 180;

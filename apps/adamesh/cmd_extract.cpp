@@ -1,5 +1,5 @@
 // `adamesh extract`: volume or implicit input → surfel complex → connectivity graph → disk and
-// Voronoi covering → base mesh (and, with the refinement stage, the adaptive hierarchy).
+// Voronoi covering → base mesh → 4-8 refinement hierarchy (extract_refine.cpp).
 #include <tbb/global_control.h>
 
 #include <cmath>
@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -22,6 +23,7 @@
 #include "args.h"
 #include "cli_util.h"
 #include "commands.h"
+#include "extract_refine.h"
 
 namespace adamesh::cli {
 
@@ -42,6 +44,7 @@ std::vector<OptionSpec> extract_specs() {
       {"--ascii", false, "ASCII PLY instead of binary"},
       {"--quiet", false, "no progress or summary output"},
   };
+  for (auto& o : refine_option_specs()) s.push_back(o);
   for (auto& o : input_option_specs()) s.push_back(o);
   return s;
 }
@@ -58,14 +61,20 @@ nlohmann::json topology_json(const TopologyReport& t) {
 int cmd_extract(const Argv& argv) {
   const Args args("extract", argv, extract_specs());
   if (args.help_requested()) {
-    std::cout << args.usage("INPUT [--iso V] --base base.ply [options]");
+    std::cout << args.usage("INPUT [--iso V] [-o mesh.ply] [--levels K | --max-error E | "
+                            "--triangles N] [--hierarchy h.amh] [--base base.ply] [options]");
     return 0;
   }
   args.expect_positionals(1, 1, "INPUT");
   const std::string spec = args.positionals()[0];
   const bool quiet = args.has("--quiet");
-  if (!args.has("--base") && !args.has("--report"))
-    fail(Status::usage, "adamesh extract: nothing to write: give --base FILE (and/or --report FILE)");
+  if (!args.has("--base") && !args.has("--report") && !args.has("-o") && !args.has("--hierarchy"))
+    fail(Status::usage, "adamesh extract: nothing to write: give -o FILE, --hierarchy FILE, "
+                        "--base FILE or --report FILE");
+  const int budgets = args.has("--levels") + args.has("--max-error") + args.has("--triangles");
+  if (budgets > 1)
+    fail(Status::usage, "adamesh extract: give at most one of --levels, --max-error, --triangles");
+  const bool refining = args.has("-o") || args.has("--hierarchy") || budgets > 0;
 
   std::unique_ptr<tbb::global_control> threads;
   int nthreads = 0;
@@ -158,6 +167,16 @@ int cmd_extract(const Argv& argv) {
   progress.finish();
   timings["write"] = clock.lap();
 
+  std::optional<RefineStage> refined;
+  if (refining) {
+    refined = run_refine_stage(args, in, iso, sc, g, base, nthreads, progress,
+                               args.has("--report"));
+    timings["refine"] = refined->refine_s;
+    timings["write"] = timings["write"].get<double>() + refined->write_s;
+    clock.lap();
+    rss["refine"] = peak_rss_mb();
+  }
+
   const TopologyReport topo = topology(base.mesh);
   const auto& st = base.stats;
   if (auto path = args.get("--report")) {
@@ -191,6 +210,10 @@ int cmd_extract(const Argv& argv) {
                          {"grading", st.validation.grading},
                          {"non_disks", st.validation.non_disks},
                          {"violated_cells", st.validation.violated_cells}};
+    if (refined) {
+      r["refine"] = refined->info;
+      r["levels"] = refined->levels;
+    }
     r["warnings"] = st.warnings;
     r["timings_s"] = timings;
     r["peak_rss_mb"] = peak_rss_mb();
@@ -206,6 +229,7 @@ int cmd_extract(const Argv& argv) {
     if (st.fallback_components)
       std::cout << "; " << st.fallback_components << " components meshed from surfels";
     std::cout << "\n";
+    if (refined) std::cout << refined->summary << "\n";
     for (const auto& w : st.warnings) std::cerr << "adamesh: warning: " << w << "\n";
   }
   return 0;

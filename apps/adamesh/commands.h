@@ -16,6 +16,7 @@ struct Command {
 };
 
 int cmd_extract(const Argv& args);
+int cmd_level(const Argv& args);
 int cmd_mc(const Argv& args);
 int cmd_stats(const Argv& args);
 int cmd_info(const Argv& args);

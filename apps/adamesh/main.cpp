@@ -13,6 +13,7 @@ const std::vector<Command>& commands() {
   static const std::vector<Command> table = {
       {"info", "describe an input: grid, value statistics, suggested iso-value", cmd_info},
       {"extract", "extract the base mesh (and refined meshes) of an iso-surface", cmd_extract},
+      {"level", "cut a mesh from a refinement hierarchy (.amh) without the volume", cmd_level},
       {"mc", "marching cubes mesh of an iso-surface (reference, manifold)", cmd_mc},
       {"stats", "topology, quality and error report of a mesh", cmd_stats},
       {"version", "print the version", cmd_version},

@@ -11,12 +11,13 @@
 //      geodesic_min_edge (4h) use the Euclidean midpoint (graph paths are quantised to the voxel
 //      there; ALGORITHM.md 5.2). Border edge: A* on the border-curve graph (border surfels joined
 //      through shared border nodes); the polyline p1, shared nodes…, p2 runs on the volume faces,
-//      and its half-length point is snapped onto the nearest face plane.
+//      and its half-length point is snapped onto the nearest face plane (if a new triangle would
+//      be flat — the border turning around a box edge — other points along it are tried).
 //   2. F_T: p += τ (U − (U·n̂) n̂), U = mean(ring) − p, n̂ = ∇f/|∇f| (area-weighted normal of the
 //      new vertex's triangles when ∇f vanishes). Border: U = (p1+p2)/2 − p along the border
-//      tangent n_face × ∇f.
-//   3. F_S: project_to_iso (≤ 5 Newton steps, |T_S| < 1e-3 h, steps ≤ 0.5 h, bisection on sign
-//      change); border vertices inside their face plane, then snapped onto it exactly.
+//      tangent n_face × ∇f. The move is capped at |e|/4.
+//   3. F_S: project_to_iso (≤ 5 Newton steps, |T_S| < 1e-3 h, steps ≤ 0.5 h and ≤ |e|/2,
+//      bisection on sign change); border vertices inside their face plane, then snapped onto it.
 //   4. Anchor: greedy walk on G (border: on the border graph) from the path's middle c-vertex to
 //      the c-vertex nearest the final position.
 #include <algorithm>
@@ -155,6 +156,34 @@ std::uint32_t shared_border_node(const SurfelComplex& sc, std::uint32_t x, std::
   return found;
 }
 
+/// F_T never moves a vertex by more than this fraction of its edge: on a sliver block (a short
+/// refinement edge, far ring vertices) the umbrella vector would throw it out of the block. On
+/// the built-in shapes 99% of the moves are below 0.17 |e|.
+constexpr double kMaxSmoothing = 0.25;
+
+Vec3 capped(const Vec3& v, double len) {
+  const double n = norm(v);
+  return n > len && n > 0 ? v * (len / n) : v;
+}
+
+/// Newton step cap: 0.5 h, and at most half the edge, so a vertex on a short edge (below the
+/// voxel size, e.g. along a crease) cannot be thrown beyond its block by the projection.
+double step_cap(const Surface& s, const EdgeInput& in) {
+  return std::min(0.5 * s.h, 0.5 * distance(in.p1, in.p2));
+}
+
+/// Smallest angle of a triangle, degrees.
+double min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
+  auto angle = [](const Vec3& u, const Vec3& v) {
+    const double d = norm(u) * norm(v);
+    return d > 0 ? std::acos(std::clamp(dot(u, v) / d, -1.0, 1.0)) * (180 / M_PI) : 0.0;
+  };
+  return std::min({angle(b - a, c - a), angle(a - b, c - b), angle(a - c, b - c)});
+}
+
+/// Border vertices whose triangles would have a smaller angle are moved along the border.
+constexpr double kMinBorderAngle = 1;
+
 Vec3 ring_normal(const EdgeInput& in, const Vec3& p) {
   Vec3 n{};
   const int closed = in.ring_size == 4 ? 4 : in.ring_size - 1;
@@ -176,25 +205,48 @@ Placed place_border(const Surface& s, const EdgeInput& in, PathWorkspace& ws) {
     if (node != 0xffffffffu) pts.push_back(sc.node_position(node));
   }
   pts.push_back(in.p2);
-  std::size_t seg = 0;
-  Vec3 p = along(pts, in.fraction, seg);
-  Vec3 face = snap_to_face(sc.grid, p);
-  // F_T along the border tangent.
-  if (in.ring_size > 0 && s.tau > 0) {
-    const Vec3 t = normalized(cross(face, s.field.gradient(p)));
-    const Vec3 u = 0.5 * (in.p1 + in.p2) - p;
-    p += s.tau * dot(u, t) * t;
+  struct Try {
+    Vec3 p;
+    std::size_t seg = 0;
+    bool converged = false;
+    double angle = -1;
+  };
+  auto place_at = [&](double fraction) {
+    Try t;
+    t.p = along(pts, fraction, t.seg);
+    const Vec3 face = snap_to_face(sc.grid, t.p);
+    // F_T along the border tangent.
+    if (in.ring_size > 0 && s.tau > 0) {
+      const Vec3 tan = normalized(cross(face, s.field.gradient(t.p)));
+      const Vec3 u = 0.5 * (in.p1 + in.p2) - t.p;
+      t.p += capped(s.tau * dot(u, tan) * tan, kMaxSmoothing * distance(in.p1, in.p2));
+    }
+    ProjectOptions po;
+    po.max_steps = 5;
+    po.tolerance = 1e-3 * s.h;
+    po.max_step = step_cap(s, in);
+    po.plane_normal = face;
+    const ProjectResult r = project_to_iso(s.field, s.iso, t.p, po);
+    t.p = r.point;
+    snap_to_face(sc.grid, t.p);
+    t.converged = r.converged;
+    if (in.ring_size == 3)
+      t.angle = std::min(min_angle(t.p, in.ring[0], in.ring[1]), min_angle(t.p, in.ring[1], in.ring[2]));
+    return t;
+  };
+  // Where the border turns around a box edge, the half-length point can fall on the straight
+  // border segment that already holds the triangle's other two vertices: its child would be
+  // flat. Other points along the border are tried then, nearest the middle first.
+  Try best = place_at(in.fraction);
+  for (const double f : {0.375, 0.625, 0.25, 0.75, 0.125, 0.875}) {
+    if (best.angle < 0 || best.angle >= kMinBorderAngle) break;
+    const Try t = place_at(f);
+    if (t.angle > best.angle) best = t;
   }
-  ProjectOptions po;
-  po.max_steps = 5;
-  po.tolerance = 1e-3 * s.h;
-  po.max_step = 0.5 * s.h;
-  po.plane_normal = face;
-  const ProjectResult r = project_to_iso(s.field, s.iso, p, po);
-  p = r.point;
-  snap_to_face(sc.grid, p);
+  const Vec3 p = best.p;
+  const std::size_t seg = best.seg;
   out.position = p;
-  out.converged = r.converged;
+  out.converged = best.converged;
   // Anchor: the border surfel nearest the result, walking the border graph from the path middle.
   const std::uint32_t start = path.empty() ? b1 : path[std::min(path.size() - 1, seg)];
   out.anchor = greedy_walk(s.border_graph, sc, start, p);
@@ -240,12 +292,12 @@ Placed place_vertex(const Surface& s, const EdgeInput& in, PathWorkspace& ws) {
     Vec3 n = s.field.gradient(p);
     const double gn = norm(n);
     n = gn > 0 && std::isfinite(gn) ? n / gn : ring_normal(in, p);
-    p += s.tau * (u - dot(u, n) * n);
+    p += capped(s.tau * (u - dot(u, n) * n), kMaxSmoothing * elen);
   }
   ProjectOptions po;
   po.max_steps = 5;
   po.tolerance = 1e-3 * s.h;
-  po.max_step = 0.5 * s.h;
+  po.max_step = step_cap(s, in);
   const ProjectResult r = project_to_iso(s.field, s.iso, p, po);
   out.position = r.point;
   out.converged = r.converged;

@@ -35,6 +35,7 @@ TriError evaluate_triangle(const ScalarField& f, double iso, const Vec3& a, cons
   TriError e;
   e.sqrt_var = static_cast<float>(std::sqrt(var));
   e.max_abs = static_cast<float>(mx);
+  e.area = static_cast<float>(0.5 * norm(cross(b - a, c - a)));
   return e;
 }
 

@@ -49,8 +49,20 @@ class Refiner {
         forest_(base_, static_cast<std::uint32_t>(pos.size())), pos_(std::move(pos)),
         anchor_(std::move(anchor)), border_(std::move(border)),
         ws_([n = surf.sc.num_surfels()] { return PathWorkspace(n); }) {
-    min_edge_ = opt.min_edge >= 0 ? opt.min_edge : (surf.field.is_analytic() ? 0.0 : 0.5 * surf.h);
+    min_edge_ = opt.min_edge >= 0 ? opt.min_edge : (surf.field.is_analytic() ? 0.25 : 0.5) * surf.h;
     err_.resize(base_.size());
+    cap_.resize(base_.size());
+    for (std::uint32_t t = 0; t < base_.size(); ++t) {
+      // Depth at which uniform bisection brings this base triangle's edges to min_edge: edges
+      // halve every two levels. Descendants never go deeper (runaway refinement along creases
+      // and noise, where the error cannot converge, stops there).
+      const auto& x = base_[t];
+      const double e = std::max({distance(pos_[x[0]], pos_[x[1]]), distance(pos_[x[1]], pos_[x[2]]),
+                                 distance(pos_[x[0]], pos_[x[2]])});
+      const double ratio = min_edge_ > 0 ? e / min_edge_ : 1e30;
+      cap_[t] = static_cast<std::uint8_t>(std::clamp(
+          2.0 * std::ceil(std::log2(std::max(ratio, 1.0))) + 2.0, 0.0, 250.0));
+    }
     std::vector<std::uint32_t> all(base_.size());
     for (std::uint32_t t = 0; t < all.size(); ++t) all[t] = t;
     evaluate(all);
@@ -125,10 +137,16 @@ class Refiner {
  private:
   std::uint32_t num_splits() const { return static_cast<std::uint32_t>(split_tri_.size()); }
 
+  /// Below the level caps (options, and the base triangle's depth cap), refinement edge ≥
+  /// min_edge, and smallest altitude ≥ min_edge/2 (a right isosceles triangle with that hypotenuse
+  /// has altitude hypotenuse/2), so slivers along creases or noise stop too.
   bool refinable(std::uint32_t t) const {
     const auto& x = forest_.tri(t);
-    if (x.level >= opt_.levels) return false;
-    return distance(pos_[x.v[1]], pos_[x.v[2]]) >= min_edge_;
+    if (x.level >= opt_.levels || x.level >= cap_[t]) return false;
+    const Vec3 &a = pos_[x.v[0]], &b = pos_[x.v[1]], &c = pos_[x.v[2]];
+    const double e = distance(b, c);
+    const double longest = std::max({e, distance(a, b), distance(a, c)});
+    return e >= min_edge_ && norm(cross(b - a, c - a)) >= 0.5 * min_edge_ * longest;
   }
 
   /// Triangles a split of t adds, forced splits included.
@@ -158,6 +176,11 @@ class Refiner {
     border_.push_back(forest_.partner(t) == kNone ? 1 : 0);
     stats_.forced_splits += forced ? 1 : 0;
     err_.resize(forest_.num_base_triangles() + 4 * static_cast<std::size_t>(num_splits()));
+    cap_.resize(err_.size());
+    const std::uint32_t c = forest_.num_base_triangles() + 4 * s;
+    const std::uint32_t n = forest_.partner(t);
+    cap_[c] = cap_[c + 1] = cap_[t];
+    if (n != kNone) cap_[c + 2] = cap_[c + 3] = cap_[n];
   }
 
   EdgeInput edge_input(std::uint32_t s) const {
@@ -251,6 +274,7 @@ class Refiner {
   std::vector<std::uint8_t> border_;
   std::vector<std::uint32_t> split_tri_;
   std::vector<TriError> err_;
+  std::vector<std::uint8_t> cap_;  ///< per triangle: deepest level its base triangle allows
   double min_edge_ = 0;
   tbb::enumerable_thread_specific<PathWorkspace> ws_;
 };
@@ -305,10 +329,13 @@ RefineResult refine_impl(const SurfelComplex& sc, const BaseMesh& bm, const Scal
       r.adaptive(variance_key, delta);
       break;
     case RefineMode::max_error:
-      r.adaptive([](const TriError& e) { return e.max_abs; }, opt.max_error_safety * opt.max_error);
+      r.adaptive([](const TriError& e) { return e.max_estimate(); }, opt.max_error);
       break;
     case RefineMode::budget:
-      r.budget(variance_key, opt.max_triangles);
+      // Integrated variance: the squared key times the area, so big triangles go first and a
+      // crease, whose error shrinks only linearly with the triangles, does not take the budget.
+      r.budget([&](const TriError& e) { return variance_key(e) * variance_key(e) * e.area; },
+               opt.max_triangles);
       break;
   }
   res.hierarchy = r.result();

@@ -6,7 +6,8 @@
 // the idea of a coarse base plus a refinement stream whose prefixes are meshes.
 //
 // Split s depends on the splits that created its two triangles (each a child of an earlier split,
-// forced splits included). Its error e(s) = max sampled |d| of its two triangles is made monotone
+// forced splits included). Its error e(s) = max distance estimate of its two triangles (sampled
+// max |d| × kMaxErrorEstimate) is made monotone
 // by propagating backwards, eff(dep) = max(e(dep), eff(s)); sorting the splits stably by
 // decreasing eff keeps every dependency before its dependants, so every prefix replays, and the
 // splits with eff > E form a prefix. Ids are renumbered to the new order (forest.h: split s owns
@@ -36,7 +37,7 @@ Hierarchy make_hierarchy(const Forest& forest, const std::vector<std::array<std:
   std::vector<float> eff(S);
   for (std::size_t s = 0; s < S; ++s) {
     const std::uint32_t t = split_tri[s], n = forest.partner(t);
-    eff[s] = std::max(err[t].max_abs, n == kNone ? 0.0f : err[n].max_abs);
+    eff[s] = std::max(err[t].max_estimate(), n == kNone ? 0.0f : err[n].max_estimate());
   }
   for (std::size_t s = S; s-- > 0;) {
     const std::uint32_t t = split_tri[s], n = forest.partner(t);
