@@ -33,6 +33,11 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SHARED_DATA = os.path.normpath(os.path.join(ROOT, "..", "shared", "data"))
 BUNDLED_CT = os.path.join(ROOT, "data", "ct_headsq", "quarter.nhdr")
 BUDGETS = [5000, 20000, 100000]
+# Inputs whose uniform levels M0..MK are scored for the convergence plot (quick: one, to stay
+# under two minutes).
+LEVEL_INPUTS = {"quick": ["torus@128"],
+                "default": ["torus@128", "gyroid@128", "ct_headsq@500.5"],
+                "full": ["torus@128", "gyroid@128", "ct_headsq@500.5"]}
 SHAPES = ["sphere", "torus", "two_tori", "linked_tori", "genus2", "cube_minus_sphere",
           "wavy_sheet", "gyroid"]
 STAGES = ["read", "surfels", "graph", "disk_cover", "voronoi", "dual", "refine", "write"]
@@ -327,7 +332,7 @@ def measure_levels(tools, inp, work, base_tris):
     if not (tools.can_levels and tools.can_hierarchy and tools.has_level_cmd):
         return None
     k = 0
-    while base_tris * 2 ** (k + 1) <= 400000 and k < 8:
+    while base_tris * 2 ** (k + 1) <= 200000 and k < 8:
         k += 1
     amh = os.path.join(work, "h.amh")
     extract(tools, inp, work, 2, levels=k, hierarchy=amh, tag="levels")
@@ -987,7 +992,7 @@ def main():
                                                  max(finals) if finals else None)
             except Failed as e:
                 rec["errors"].append(f"scaling: {e}")
-        if inp.name in ("torus@128", "ct_headsq@500.5", "gyroid@128"):
+        if inp.name in LEVEL_INPUTS[args.mode]:
             try:
                 rec["levels"] = measure_levels(tools, inp, work, rec["extract"]["base"]["triangles"])
             except Failed as e:
