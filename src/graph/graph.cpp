@@ -67,17 +67,13 @@ ConnectivityGraph build_graph(const SurfelComplex& sc) {
   });
   std::partial_sum(g.row.begin(), g.row.end(), g.row.begin());
   g.col.resize(g.row[n]);
-  g.weight.resize(g.row[n]);
+  g.position = sc.cvertex.data();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
     Small tmp;
     for (std::size_t s = r.begin(); s != r.end(); ++s) {
       tmp.n = 0;
       link_of(sc, static_cast<std::uint32_t>(s), tmp);
-      const Vec3 c = sc.cvertex_position(s);
-      for (std::size_t i = 0; i < tmp.size(); ++i) {
-        g.col[g.row[s] + i] = tmp[i];
-        g.weight[g.row[s] + i] = static_cast<float>(distance(c, sc.cvertex_position(tmp[i])));
-      }
+      for (std::size_t i = 0; i < tmp.size(); ++i) g.col[g.row[s] + i] = tmp[i];
     }
   });
 

@@ -95,12 +95,10 @@ void dijkstra(const ConnectivityGraph& g, PathWorkspace& ws, std::uint32_t sourc
     const Visit what = visit(v, d);
     if (what == Visit::stop) return;
     if (what == Visit::skip) continue;
-    const auto nb = g.neighbours(v);
-    const auto w = g.weights(v);
-    for (std::size_t i = 0; i < nb.size(); ++i) {
-      const std::uint32_t u = nb[i];
+    for (std::size_t k = g.row[v]; k < g.row[v + 1]; ++k) {
+      const std::uint32_t u = g.col[k];
       if (ws.settled(u) || !allowed(u)) continue;
-      const double nd = d + w[i];
+      const double nd = d + g.edge_weight(v, k);
       if (nd <= limit) ws.relax(u, nd, v, nd);
     }
   }
@@ -132,12 +130,10 @@ std::vector<std::uint32_t> astar(const ConnectivityGraph& g, const SurfelComplex
       length = d;
       break;
     }
-    const auto nb = g.neighbours(v);
-    const auto w = g.weights(v);
-    for (std::size_t i = 0; i < nb.size(); ++i) {
-      const std::uint32_t u = nb[i];
+    for (std::size_t k = g.row[v]; k < g.row[v + 1]; ++k) {
+      const std::uint32_t u = g.col[k];
       if (ws.settled(u) || !allowed(u)) continue;
-      const double nd = d + w[i];
+      const double nd = d + g.edge_weight(v, k);
       ws.relax(u, nd, v, nd + h(u));
     }
   }

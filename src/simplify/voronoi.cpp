@@ -72,11 +72,9 @@ void Voronoi::add_cells(const std::vector<std::pair<std::uint32_t, std::uint32_t
     heap.pop();
     if (!better(e.d, e.cv, e.v)) continue;  // stale, or a duplicate of the current assignment
     assign(e.v, e.c, e.d);
-    const auto nb = g_.neighbours(e.v);
-    const auto w = g_.weights(e.v);
-    for (std::size_t i = 0; i < nb.size(); ++i) {
-      const double nd = e.d + w[i];
-      if (better(nd, e.cv, nb[i])) heap.push({nd, e.cv, nb[i], e.c});
+    for (std::size_t k = g_.row[e.v]; k < g_.row[e.v + 1]; ++k) {
+      const double nd = e.d + g_.edge_weight(e.v, k);
+      if (better(nd, e.cv, g_.col[k])) heap.push({nd, e.cv, g_.col[k], e.c});
     }
   }
 }
@@ -143,10 +141,8 @@ std::size_t Voronoi::regularize() {
           trial[q] = x;
           if (pinched_fan(trial)) continue;
           double dx = kInf;  // distance to x's centre through a neighbour in x
-          const auto nb = g_.neighbours(s);
-          const auto w = g_.weights(s);
-          for (std::size_t i = 0; i < nb.size(); ++i)
-            if (cell_[nb[i]] == x) dx = std::min(dx, dist_[nb[i]] + w[i]);
+          for (std::size_t k = g_.row[s]; k < g_.row[s + 1]; ++k)
+            if (cell_[g_.col[k]] == x) dx = std::min(dx, dist_[g_.col[k]] + g_.edge_weight(s, k));
           const double penalty = dx - dist_[s];
           if (penalty < best || (penalty == best && s < best_v)) {
             best = penalty;
