@@ -9,6 +9,7 @@
 #include "voronoi.h"
 
 #include <algorithm>
+#include <bit>
 #include <cassert>
 #include <queue>
 #include <unordered_set>
@@ -38,7 +39,7 @@ bool ccw_fan(const SurfelComplex& sc, std::uint32_t n, std::array<std::int32_t, 
 
 Voronoi::Voronoi(const SurfelComplex& sc, const ConnectivityGraph& g)
     : sc_(sc), g_(g), cell_(g.num_vertices(), kNone), dist_(g.num_vertices(), kInf),
-      stamp_(g.num_vertices(), 0) {}
+      dirty_((sc.num_nodes() + 63) / 64, 0), stamp_(g.num_vertices(), 0) {}
 
 bool Voronoi::better(double d, std::uint32_t cv, std::uint32_t v) const {
   if (cell_[v] == kNone) return true;
@@ -47,16 +48,12 @@ bool Voronoi::better(double d, std::uint32_t cv, std::uint32_t v) const {
 }
 
 void Voronoi::add_cells(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& cells) {
+  // Lazy heap of 16-byte entries ordered by (distance, centre c-vertex, vertex): the centre is
+  // looked up through the cell instead of being stored (a cell's centre does not change here).
   struct Entry {
     double d;
-    std::uint32_t cv, v, c;
-    bool operator>(const Entry& o) const {
-      if (d != o.d) return d > o.d;
-      if (cv != o.cv) return cv > o.cv;
-      return v > o.v;
-    }
+    std::uint32_t v, c;
   };
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
   for (const auto& [c, x] : cells) {
     if (c >= centre_.size()) {
       centre_.resize(c + 1, kNone);
@@ -64,17 +61,29 @@ void Voronoi::add_cells(const std::vector<std::pair<std::uint32_t, std::uint32_t
       touched_flag_.resize(c + 1, 0);
     }
     centre_[c] = x;
-    heap.push({0.0, x, x, c});
   }
-  auto assign = [&](std::uint32_t v, std::uint32_t c, double d) { reassign(v, c, d); };
+  const std::uint32_t* centre = centre_.data();
+  auto after = [centre](const Entry& a, const Entry& b) {  // a pops after b
+    if (a.d != b.d) return a.d > b.d;
+    if (a.c != b.c) return centre[a.c] > centre[b.c];
+    return a.v > b.v;
+  };
+  std::vector<Entry> heap;
+  auto push = [&](const Entry& e) {
+    heap.push_back(e);
+    std::push_heap(heap.begin(), heap.end(), after);
+  };
+  for (const auto& [c, x] : cells) push({0.0, x, c});
   while (!heap.empty()) {
-    const Entry e = heap.top();
-    heap.pop();
-    if (!better(e.d, e.cv, e.v)) continue;  // stale, or a duplicate of the current assignment
-    assign(e.v, e.c, e.d);
+    std::pop_heap(heap.begin(), heap.end(), after);
+    const Entry e = heap.back();
+    heap.pop_back();
+    const std::uint32_t cv = centre[e.c];
+    if (!better(e.d, cv, e.v)) continue;  // stale, or a duplicate of the current assignment
+    reassign(e.v, e.c, e.d);
     for (std::size_t k = g_.row[e.v]; k < g_.row[e.v + 1]; ++k) {
       const double nd = e.d + g_.edge_weight(e.v, k);
-      if (better(nd, e.cv, g_.col[k])) heap.push({nd, e.cv, g_.col[k], e.c});
+      if (better(nd, cv, g_.col[k])) push({nd, g_.col[k], e.c});
     }
   }
 }
@@ -88,7 +97,8 @@ void Voronoi::reassign(std::uint32_t v, std::uint32_t c, double d) {
   ++size_[c];
   touch(c);
   for (auto nb : g_.neighbours(v)) touch(cell_[nb]);
-  changed_.push_back(v);
+  for (auto n : sc_.nodes_of(v)) dirty_[n >> 6] |= std::uint64_t{1} << (n & 63);
+  any_dirty_ = true;
 }
 
 namespace {
@@ -110,54 +120,57 @@ bool pinched_fan(const std::array<std::uint32_t, 4>& c) {
 
 std::size_t Voronoi::regularize() {
   std::size_t moves = 0;
-  for (int pass = 0; pass < 8 && !changed_.empty(); ++pass) {
-    std::vector<std::uint32_t> nodes;
-    for (auto v : changed_)
-      for (auto n : sc_.nodes_of(v)) nodes.push_back(n);
-    changed_.clear();
-    std::sort(nodes.begin(), nodes.end());
-    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  std::vector<std::uint64_t> scan(dirty_.size());
+  for (int pass = 0; pass < 8 && any_dirty_; ++pass) {
+    // The nodes of the vertices changed since the last pass, in increasing order.
+    scan.swap(dirty_);
+    std::fill(dirty_.begin(), dirty_.end(), 0);
+    any_dirty_ = false;
     std::array<std::int32_t, 4> fan;
-    for (auto n : nodes) {
-      if (!ccw_fan(sc_, n, fan)) continue;
-      std::array<std::uint32_t, 4> c;
-      bool skip = false;
-      for (int q = 0; q < 4; ++q) {
-        c[q] = cell_[static_cast<std::uint32_t>(fan[q])];
-        skip |= c[q] == kNone;
-      }
-      if (skip || !pinched_fan(c)) continue;
-      // Candidate moves: one fan surfel takes the cell of a fan neighbour.
-      double best = kInf;
-      std::uint32_t best_v = kNone, best_c = kNone;
-      double best_d = 0;
-      for (int q = 0; q < 4; ++q) {
-        const auto s = static_cast<std::uint32_t>(fan[q]);
-        if (centre_[c[q]] == s) continue;  // centres stay in their cells
-        for (int side : {1, 3}) {
-          const std::uint32_t x = c[(q + side) % 4];
-          if (x == c[q]) continue;
-          auto trial = c;
-          trial[q] = x;
-          if (pinched_fan(trial)) continue;
-          double dx = kInf;  // distance to x's centre through a neighbour in x
-          for (std::size_t k = g_.row[s]; k < g_.row[s + 1]; ++k)
-            if (cell_[g_.col[k]] == x) dx = std::min(dx, dist_[g_.col[k]] + g_.edge_weight(s, k));
-          const double penalty = dx - dist_[s];
-          if (penalty < best || (penalty == best && s < best_v)) {
-            best = penalty;
-            best_v = s;
-            best_c = x;
-            best_d = dx;
+    for (std::size_t word = 0; word < scan.size(); ++word) {
+      for (std::uint64_t bits = scan[word]; bits != 0; bits &= bits - 1) {
+        const auto n = static_cast<std::uint32_t>(64 * word + std::countr_zero(bits));
+        if (!ccw_fan(sc_, n, fan)) continue;
+        std::array<std::uint32_t, 4> c;
+        bool skip = false;
+        for (int q = 0; q < 4; ++q) {
+          c[q] = cell_[static_cast<std::uint32_t>(fan[q])];
+          skip |= c[q] == kNone;
+        }
+        if (skip || !pinched_fan(c)) continue;
+        // Candidate moves: one fan surfel takes the cell of a fan neighbour.
+        double best = kInf;
+        std::uint32_t best_v = kNone, best_c = kNone;
+        double best_d = 0;
+        for (int q = 0; q < 4; ++q) {
+          const auto s = static_cast<std::uint32_t>(fan[q]);
+          if (centre_[c[q]] == s) continue;  // centres stay in their cells
+          for (int side : {1, 3}) {
+            const std::uint32_t x = c[(q + side) % 4];
+            if (x == c[q]) continue;
+            auto trial = c;
+            trial[q] = x;
+            if (pinched_fan(trial)) continue;
+            double dx = kInf;  // distance to x's centre through a neighbour in x
+            for (std::size_t k = g_.row[s]; k < g_.row[s + 1]; ++k)
+              if (cell_[g_.col[k]] == x) dx = std::min(dx, dist_[g_.col[k]] + g_.edge_weight(s, k));
+            const double penalty = dx - dist_[s];
+            if (penalty < best || (penalty == best && s < best_v)) {
+              best = penalty;
+              best_v = s;
+              best_c = x;
+              best_d = dx;
+            }
           }
         }
+        if (best_v == kNone) continue;
+        reassign(best_v, best_c, best_d);
+        ++moves;
       }
-      if (best_v == kNone) continue;
-      reassign(best_v, best_c, best_d);
-      ++moves;
     }
   }
-  changed_.clear();
+  std::fill(dirty_.begin(), dirty_.end(), 0);
+  any_dirty_ = false;
   return moves;
 }
 

@@ -86,7 +86,9 @@ class Voronoi {
   std::vector<std::uint32_t> size_;     // per cell
   std::vector<std::uint8_t> touched_flag_;
   std::vector<std::uint32_t> touched_;
-  std::vector<std::uint32_t> changed_;  // vertices whose cell changed (for regularize)
+  /// Bit per node: a node of a vertex whose cell changed since the last regularize pass.
+  std::vector<std::uint64_t> dirty_;
+  bool any_dirty_ = false;
   void reassign(std::uint32_t v, std::uint32_t c, double d);
   // scratch for check_cell
   std::vector<std::uint32_t> stamp_;
