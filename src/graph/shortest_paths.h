@@ -21,27 +21,32 @@ inline constexpr double kInf = std::numeric_limits<double>::infinity();
 
 class PathWorkspace {
  public:
-  explicit PathWorkspace(std::size_t n) : dist_(n), pred_(n), seen_(n, 0), done_(n, 0) {}
+  /// Workspace for graphs of n vertices: 12 bytes per vertex, 16 with predecessors (needed by
+  /// astar's path, and pred()).
+  explicit PathWorkspace(std::size_t n, bool predecessors = true)
+      : dist_(n), pred_(predecessors ? n : 0), stamp_(n, 0) {}
 
   /// Starts a new search: every vertex becomes unseen in O(1).
   void begin() {
-    if (++gen_ == 0) {  // wrapped: clear once every 2^32 searches
-      std::fill(seen_.begin(), seen_.end(), 0);
-      std::fill(done_.begin(), done_.end(), 0);
+    if (++gen_ > kMaxGen) {  // wrapped: clear once every 2^31 searches
+      std::fill(stamp_.begin(), stamp_.end(), 0);
       gen_ = 1;
     }
     heap_.clear();
   }
-  double dist(std::uint32_t v) const { return seen_[v] == gen_ ? dist_[v] : kInf; }
-  bool settled(std::uint32_t v) const { return done_[v] == gen_; }
+  double dist(std::uint32_t v) const { return seen(v) ? dist_[v] : kInf; }
+  bool settled(std::uint32_t v) const { return stamp_[v] == (gen_ << 1 | 1); }
   std::uint32_t pred(std::uint32_t v) const { return pred_[v]; }
 
   /// Lowers v's tentative distance (and remembers its predecessor); returns true if it improved.
   bool relax(std::uint32_t v, double d, std::uint32_t from, double key) {
-    if (seen_[v] == gen_ && dist_[v] <= d) return false;
-    seen_[v] = gen_;
+    if (seen(v)) {
+      if (dist_[v] <= d) return false;
+    } else {
+      stamp_[v] = gen_ << 1;
+    }
     dist_[v] = d;
-    pred_[v] = from;
+    if (!pred_.empty()) pred_[v] = from;
     heap_.push_back({key, v});
     std::push_heap(heap_.begin(), heap_.end(), Greater{});
     return true;
@@ -52,9 +57,8 @@ class PathWorkspace {
       std::pop_heap(heap_.begin(), heap_.end(), Greater{});
       const auto e = heap_.back();
       heap_.pop_back();
-      if (done_[e.second] == gen_) continue;
-      if (seen_[e.second] != gen_) continue;
-      done_[e.second] = gen_;
+      if (stamp_[e.second] != gen_ << 1) continue;  // settled already (or not seen)
+      stamp_[e.second] = gen_ << 1 | 1;
       v = e.second;
       return true;
     }
@@ -70,9 +74,12 @@ class PathWorkspace {
       return a > b;
     }
   };
+  static constexpr std::uint32_t kMaxGen = 0x7fffffffu;
+  bool seen(std::uint32_t v) const { return stamp_[v] >> 1 == gen_; }
   std::vector<double> dist_;
   std::vector<std::uint32_t> pred_;
-  std::vector<std::uint32_t> seen_, done_;
+  /// 2·generation while seen in the current search, 2·generation + 1 once settled.
+  std::vector<std::uint32_t> stamp_;
   std::vector<std::pair<double, std::uint32_t>> heap_;
   std::uint32_t gen_ = 0;
 };

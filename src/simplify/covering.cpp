@@ -8,6 +8,7 @@
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <utility>
 
 #include "adamesh/simplify.h"
 #include "disk_cover.h"
@@ -66,7 +67,7 @@ Covering build_covering(const SurfelComplex& sc, const ConnectivityGraph& g,
   stats.r_min = r_min;
   stats.r_max = r_max;
 
-  DiskCover cover(sc, g, active, r_max, r_min, stats);
+  DiskCover cover(sc, g, std::move(active), r_max, r_min, stats);
   if (opt.progress) cover.on_progress = [&](double f) { opt.progress("disk cover", f); };
   cover.seed();
   cover.run();

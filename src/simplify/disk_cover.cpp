@@ -23,18 +23,19 @@ DiskCover::DiskCover(const SurfelComplex& sc, const ConnectivityGraph& g,
                      SimplifyStats& stats)
     : sc_(sc),
       g_(g),
-      active_(std::move(active)),
+      flags_(std::move(active)),
       r_max_(r_max),
       r_min_(r_min),
       stats_(stats),
-      ws_(g.num_vertices()) {
+      ws_(g.num_vertices(), /*predecessors=*/false) {
   max_level_ = r_max > r_min ? static_cast<int>(std::ceil(std::log2(r_max / r_min) - 1e-9)) : 0;
   max_level_ = std::clamp(max_level_, 0, 60);
   const std::size_t n = g.num_vertices();
   label_.assign(n, 0);
   dnear_.assign(n, kInfF);
-  centre_disk_.assign(n, -1);
   head_.assign(n, kNil);
+  slot_.assign(n, kNil);
+  for (auto& f : flags_) f = f ? kActive : 0;
 }
 
 double DiskCover::radius_of(int level) const { return r_max_ / std::ldexp(1.0, level); }
@@ -47,32 +48,85 @@ double DiskCover::rlo(std::uint32_t v) const {
 
 void DiskCover::seed() {
   active_count_ = 0;
+  heap_.reserve(g_.num_vertices());
   for (std::uint32_t v = 0; v < g_.num_vertices(); ++v) {
-    active_count_ += active_[v];
-    if (active_[v] && !covered(v)) push(v);
+    active_count_ += active(v);
+    if (active(v) && !covered(v)) push(v);
   }
+}
+
+std::uint32_t DiskCover::sift_up(std::uint32_t i) {
+  const std::uint32_t v = heap_[i];
+  while (i > 0) {
+    const std::uint32_t parent = (i - 1) / 2;
+    if (!before(v, heap_[parent])) break;
+    heap_[i] = heap_[parent];
+    slot_[heap_[i]] = i;
+    i = parent;
+  }
+  heap_[i] = v;
+  slot_[v] = i;
+  return i;
+}
+
+void DiskCover::sift_down(std::uint32_t i) {
+  const std::uint32_t v = heap_[i];
+  const auto size = static_cast<std::uint32_t>(heap_.size());
+  for (;;) {
+    std::uint32_t child = 2 * i + 1;
+    if (child >= size) break;
+    if (child + 1 < size && before(heap_[child + 1], heap_[child])) ++child;
+    if (!before(heap_[child], v)) break;
+    heap_[i] = heap_[child];
+    slot_[heap_[i]] = i;
+    i = child;
+  }
+  heap_[i] = v;
+  slot_[v] = i;
+}
+
+void DiskCover::push(std::uint32_t v) {
+  if (slot_[v] == kNil) {
+    heap_.push_back(v);
+    sift_up(static_cast<std::uint32_t>(heap_.size() - 1));
+  } else {
+    sift_down(sift_up(slot_[v]));
+  }
+}
+
+std::uint32_t DiskCover::pop() {
+  const std::uint32_t v = heap_.front();
+  slot_[v] = kNil;
+  const std::uint32_t last = heap_.back();
+  heap_.pop_back();
+  if (!heap_.empty() && last != v) {
+    heap_.front() = last;
+    sift_down(0);
+  }
+  return v;
 }
 
 void DiskCover::add_cover(std::uint32_t v, std::uint32_t d) {
   std::uint32_t l;
   if (free_ != kNil) {
     l = free_;
-    free_ = links_[l].next;
+    free_ = link(l).next;
   } else {
-    l = static_cast<std::uint32_t>(links_.size());
-    links_.push_back({});
+    l = num_links_++;
+    if ((l >> kChunkBits) == link_chunks_.size())
+      link_chunks_.push_back(std::make_unique<Link[]>(std::size_t{1} << kChunkBits));
   }
   if (head_[v] == kNil) ++covered_count_;
-  links_[l] = {d, head_[v]};
+  link(l) = {d, head_[v]};
   head_[v] = l;
 }
 
 void DiskCover::remove_cover(std::uint32_t v, std::uint32_t d) {
-  for (std::uint32_t* p = &head_[v]; *p != kNil; p = &links_[*p].next) {
-    if (links_[*p].disk == d) {
+  for (std::uint32_t* p = &head_[v]; *p != kNil; p = &link(*p).next) {
+    if (link(*p).disk == d) {
       const std::uint32_t l = *p;
-      *p = links_[l].next;
-      links_[l].next = free_;
+      *p = link(l).next;
+      link(l).next = free_;
       free_ = l;
       if (head_[v] == kNil) --covered_count_;
       return;
@@ -161,7 +215,7 @@ double DiskCover::explore(std::uint32_t x, double R, int first, int last) {
             return Visit::stop;
           }
         }
-        if (u != x && centre_disk_[u] >= 0) {  // independence: the disk must not reach a centre
+        if (u != x && (flags_[u] & kCentre)) {  // independence: the disk must not reach a centre
           centre_d = d;
           return Visit::stop;
         }
@@ -185,7 +239,7 @@ double DiskCover::explore(std::uint32_t x, double R, int first, int last) {
         if (covered(u)) caps_.push_back({d, 2.0 * rlo(u)});
         return Visit::expand;
       },
-      [&](std::uint32_t w) { return active_[w] != 0; });
+      [&](std::uint32_t w) { return active(w); });
   // Nothing beyond R was explored: the last prefix stands for radii up to R only.
   if (last_d >= 0) record(last_d, std::min(centre_d, std::nextafter(R, kInf)));
   return centre_d;
@@ -241,7 +295,7 @@ void DiskCover::accept(std::uint32_t x, const Grown& grown) {
   radius_.push_back(grown.radius);
   level_.push_back(static_cast<std::int8_t>(grown.level));
   halving_queued_.push_back(0);
-  centre_disk_[x] = static_cast<std::int32_t>(id);
+  flags_[x] |= kCentre;
   new_disks_.push_back(id);
   const double r = radius_[id];  // the stored (float) radius defines the disk from now on
   const double big = 2.0 * r * (1 + 1e-9);
@@ -267,7 +321,7 @@ void DiskCover::accept(std::uint32_t x, const Grown& grown) {
         }
         return Visit::expand;
       },
-      [&](std::uint32_t w) { return active_[w] != 0; });
+      [&](std::uint32_t w) { return active(w); });
 }
 
 bool DiskCover::halve(std::uint32_t z, bool grading) {
@@ -313,7 +367,7 @@ bool DiskCover::halve(std::uint32_t z, bool grading) {
         }
         return Visit::expand;
       },
-      [&](std::uint32_t w) { return active_[w] != 0; });
+      [&](std::uint32_t w) { return active(w); });
   return true;
 }
 
@@ -328,11 +382,8 @@ void DiskCover::process_halvings() {
 
 void DiskCover::run() {
   while (!heap_.empty()) {
-    const Candidate c = heap_.top();
-    heap_.pop();
-    const std::uint32_t v = c.v;
-    if (!active_[v] || covered(v)) continue;
-    if (c.label != label_[v] || c.dnear != dnear_[v]) continue;  // stale: a fresh entry exists
+    const std::uint32_t v = pop();
+    if (!active(v) || covered(v)) continue;
     const Grown grown = grow(v, label_[v]);
     accept(v, grown);
     process_halvings();

@@ -4,7 +4,7 @@
 
 #include <cstdint>
 #include <functional>
-#include <queue>
+#include <memory>
 #include <vector>
 
 #include "adamesh/simplify.h"
@@ -67,11 +67,11 @@ class DiskCover {
   double radius(std::uint32_t d) const { return radius_[d]; }
   int level(std::uint32_t d) const { return level_[d]; }
   bool covered(std::uint32_t v) const { return head_[v] != kNil; }
-  bool active(std::uint32_t v) const { return active_[v] != 0; }
+  bool active(std::uint32_t v) const { return (flags_[v] & kActive) != 0; }
   /// Disks covering v.
   template <class F>
   void for_each_cover(std::uint32_t v, F&& f) const {
-    for (std::uint32_t l = head_[v]; l != kNil; l = links_[l].next) f(links_[l].disk);
+    for (std::uint32_t l = head_[v]; l != kNil; l = link(l).next) f(link(l).disk);
   }
   /// Disks accepted since the last call.
   std::vector<std::uint32_t> take_new_disks();
@@ -83,22 +83,8 @@ class DiskCover {
     double radius;
     int level;
   };
-  struct Candidate {
-    std::int8_t label;
-    float dnear;
-    std::uint32_t v;
-  };
-  struct After {  // priority: smaller label, then finite dnear, then farther, then smaller id
-    bool operator()(const Candidate& a, const Candidate& b) const {
-      if (a.label != b.label) return a.label > b.label;
-      const bool fa = a.dnear < kInfF, fb = b.dnear < kInfF;
-      if (fa != fb) return fb;
-      if (a.dnear != b.dnear) return a.dnear < b.dnear;
-      return a.v > b.v;
-    }
-  };
   static constexpr float kInfF = 3.0e38f;
-
+  static constexpr std::uint8_t kActive = 1, kCentre = 2;  // flags_ bits
   double radius_of(int level) const;
   double rlo(std::uint32_t v) const;
   Grown grow(std::uint32_t x, int level);
@@ -108,26 +94,43 @@ class DiskCover {
   /// centre met (infinity if none).
   double explore(std::uint32_t x, double R, int first, int last);
   void accept(std::uint32_t x, const Grown& g);
-  void push(std::uint32_t v) { heap_.push({label_[v], dnear_[v], v}); }
+  /// Candidate priority: smaller label, then finite dnear, then farther, then smaller id.
+  bool before(std::uint32_t a, std::uint32_t b) const {
+    if (label_[a] != label_[b]) return label_[a] < label_[b];
+    const bool fa = dnear_[a] < kInfF, fb = dnear_[b] < kInfF;
+    if (fa != fb) return fa;
+    if (dnear_[a] != dnear_[b]) return dnear_[a] > dnear_[b];
+    return a < b;
+  }
+  /// Inserts v into the candidate heap, or restores its place after its key changed.
+  void push(std::uint32_t v);
+  std::uint32_t pop();
+  std::uint32_t sift_up(std::uint32_t i);
+  void sift_down(std::uint32_t i);
+  struct Link {
+    std::uint32_t disk, next;
+  };
+  static constexpr unsigned kChunkBits = 14;  // links live in chunks of 2^14 (no regrowth copies)
+  Link& link(std::uint32_t l) { return link_chunks_[l >> kChunkBits][l & ((1u << kChunkBits) - 1)]; }
+  const Link& link(std::uint32_t l) const {
+    return link_chunks_[l >> kChunkBits][l & ((1u << kChunkBits) - 1)];
+  }
   void add_cover(std::uint32_t v, std::uint32_t d);
   void remove_cover(std::uint32_t v, std::uint32_t d);
   void queue_halving(std::uint32_t d);
 
   const SurfelComplex& sc_;
   const ConnectivityGraph& g_;
-  std::vector<std::uint8_t> active_;
+  std::vector<std::uint8_t> flags_;  ///< per vertex: kActive, kCentre
   double r_max_, r_min_;
   int max_level_;
   SimplifyStats& stats_;
 
   std::vector<std::int8_t> label_;
   std::vector<float> dnear_;
-  std::vector<std::int32_t> centre_disk_;
-  std::vector<std::uint32_t> head_;
-  struct Link {
-    std::uint32_t disk, next;
-  };
-  std::vector<Link> links_;
+  std::vector<std::uint32_t> head_;  ///< per vertex: its first cover link, or kNil
+  std::vector<std::unique_ptr<Link[]>> link_chunks_;
+  std::uint32_t num_links_ = 0;
   std::uint32_t free_ = kNil;
   std::size_t covered_count_ = 0, active_count_ = 0;
 
@@ -138,7 +141,10 @@ class DiskCover {
   std::vector<std::uint32_t> halving_;
   std::vector<std::uint32_t> new_disks_;
 
-  std::priority_queue<Candidate, std::vector<Candidate>, After> heap_;
+  // Candidate heap: uncovered vertices (covered ones are skipped when popped), each at most once,
+  // ordered by before() on their current label and dnear.
+  std::vector<std::uint32_t> heap_;
+  std::vector<std::uint32_t> slot_;  ///< per vertex: its index in heap_, or kNil
   PathWorkspace ws_;
   std::vector<std::pair<double, double>> caps_;
   std::vector<std::uint8_t> valid_;
