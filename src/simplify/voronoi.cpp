@@ -48,12 +48,6 @@ bool Voronoi::better(double d, std::uint32_t cv, std::uint32_t v) const {
 }
 
 void Voronoi::add_cells(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& cells) {
-  // Lazy heap of 16-byte entries ordered by (distance, centre c-vertex, vertex): the centre is
-  // looked up through the cell instead of being stored (a cell's centre does not change here).
-  struct Entry {
-    double d;
-    std::uint32_t v, c;
-  };
   for (const auto& [c, x] : cells) {
     if (c >= centre_.size()) {
       centre_.resize(c + 1, kNone);
@@ -62,30 +56,78 @@ void Voronoi::add_cells(const std::vector<std::pair<std::uint32_t, std::uint32_t
     }
     centre_[c] = x;
   }
+  // Indexed heap: at most one entry per vertex, its best offer so far, ordered by (distance,
+  // centre c-vertex, vertex) — the centre is looked up through the cell. Vertices are assigned
+  // in that order and each at most once (weights are ≥ 0), exactly as a lazy heap would.
+  // stamp_ serves as the vertex → heap slot map meanwhile (kNone: not in the heap).
+  struct Entry {
+    double d;
+    std::uint32_t v, c;
+  };
   const std::uint32_t* centre = centre_.data();
-  auto after = [centre](const Entry& a, const Entry& b) {  // a pops after b
-    if (a.d != b.d) return a.d > b.d;
-    if (a.c != b.c) return centre[a.c] > centre[b.c];
-    return a.v > b.v;
+  auto before = [centre](const Entry& a, const Entry& b) {
+    if (a.d != b.d) return a.d < b.d;
+    if (a.c != b.c) return centre[a.c] < centre[b.c];
+    return a.v < b.v;
   };
   std::vector<Entry> heap;
-  auto push = [&](const Entry& e) {
-    heap.push_back(e);
-    std::push_heap(heap.begin(), heap.end(), after);
+  std::vector<std::uint32_t>& slot = stamp_;
+  std::fill(slot.begin(), slot.end(), kNone);
+  auto place = [&](std::size_t i, const Entry& e) {
+    heap[i] = e;
+    slot[e.v] = static_cast<std::uint32_t>(i);
   };
-  for (const auto& [c, x] : cells) push({0.0, x, c});
-  while (!heap.empty()) {
-    std::pop_heap(heap.begin(), heap.end(), after);
-    const Entry e = heap.back();
-    heap.pop_back();
-    const std::uint32_t cv = centre[e.c];
-    if (!better(e.d, cv, e.v)) continue;  // stale, or a duplicate of the current assignment
-    reassign(e.v, e.c, e.d);
-    for (std::size_t k = g_.row[e.v]; k < g_.row[e.v + 1]; ++k) {
-      const double nd = e.d + g_.edge_weight(e.v, k);
-      if (better(nd, cv, g_.col[k])) push({nd, g_.col[k], e.c});
+  auto sift_up = [&](std::size_t i) {
+    const Entry e = heap[i];
+    while (i > 0 && before(e, heap[(i - 1) / 2])) {
+      place(i, heap[(i - 1) / 2]);
+      i = (i - 1) / 2;
     }
+    place(i, e);
+  };
+  auto sift_down = [&](std::size_t i) {
+    const Entry e = heap[i];
+    for (;;) {
+      std::size_t child = 2 * i + 1;
+      if (child >= heap.size()) break;
+      if (child + 1 < heap.size() && before(heap[child + 1], heap[child])) ++child;
+      if (!before(heap[child], e)) break;
+      place(i, heap[child]);
+      i = child;
+    }
+    place(i, e);
+  };
+  auto offer = [&](double d, std::uint32_t v, std::uint32_t c) {
+    if (!better(d, centre[c], v)) return;
+    const std::uint32_t i = slot[v];
+    if (i == kNone) {
+      heap.push_back({d, v, c});
+      sift_up(heap.size() - 1);
+    } else if (before({d, v, c}, heap[i])) {
+      heap[i].d = d;
+      heap[i].c = c;
+      sift_up(i);
+    }
+  };
+  for (const auto& [c, x] : cells) offer(0.0, x, c);
+  while (!heap.empty()) {
+    const Entry e = heap.front();
+    slot[e.v] = kNone;
+    if (heap.size() > 1) {
+      heap.front() = heap.back();
+      heap.pop_back();
+      sift_down(0);
+    } else {
+      heap.pop_back();
+    }
+    const std::uint32_t cv = centre[e.c];
+    if (!better(e.d, cv, e.v)) continue;
+    reassign(e.v, e.c, e.d);
+    for (std::size_t k = g_.row[e.v]; k < g_.row[e.v + 1]; ++k)
+      offer(e.d + g_.edge_weight(e.v, k), g_.col[k], e.c);
   }
+  std::fill(stamp_.begin(), stamp_.end(), 0);  // back to generation stamps
+  gen_ = 0;
 }
 
 void Voronoi::reassign(std::uint32_t v, std::uint32_t c, double d) {

@@ -91,7 +91,7 @@ class Voronoi {
   bool any_dirty_ = false;
   void reassign(std::uint32_t v, std::uint32_t c, double d);
   // scratch for check_cell
-  std::vector<std::uint32_t> stamp_;
+  std::vector<std::uint32_t> stamp_;  ///< generation stamps; heap slots inside add_cells
   std::uint32_t gen_ = 0;
 };
 
