@@ -111,7 +111,7 @@ int cmd_extract(const Argv& argv) {
   progress.stage("surfels");
   SurfelOptions so;
   so.threads = nthreads;
-  const SurfelComplex sc = build_surfels(*in.volume, iso, in.inside_sign, so);
+  SurfelComplex sc = build_surfels(*in.volume, iso, in.inside_sign, so);
   progress.finish();
   timings["surfels"] = clock.lap();
   rss["surfels"] = peak_rss_mb();
@@ -119,6 +119,8 @@ int cmd_extract(const Argv& argv) {
 
   progress.stage("graph");
   const ConnectivityGraph g = build_graph(sc);
+  // Memory (docs/SIMPLIFICATION.md): nothing downstream reads the surfels' voxel indices.
+  std::vector<std::uint64_t>().swap(sc.surfel_voxel);
   progress.finish();
   timings["graph"] = clock.lap();
   rss["graph"] = peak_rss_mb();
@@ -137,7 +139,7 @@ int cmd_extract(const Argv& argv) {
 
   progress.stage("disk cover");
   SimplifyStats stats;
-  const Covering cov = build_covering(sc, g, opt, stats);
+  Covering cov = build_covering(sc, g, opt, stats);
   progress.finish();
   if (args.has("--validate")) stats.validation = validate_covering(sc, g, cov);
   clock.lap();
@@ -147,6 +149,7 @@ int cmd_extract(const Argv& argv) {
 
   progress.stage("dual");
   BaseMesh base = build_base_mesh(sc, g, cov, in.field.get(), opt, std::move(stats));
+  cov = Covering{};  // refinement needs the complex, the graph and the base mesh only
   progress.finish();
   timings["dual"] = clock.lap();
   rss["dual"] = peak_rss_mb();

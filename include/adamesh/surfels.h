@@ -46,11 +46,15 @@ struct SurfelComplex {
   /// Per polygon edge (same indexing as surfel_nodes): the surfel sharing that face segment in
   /// the neighbouring voxel, or -1 when the segment lies on the volume border.
   std::vector<std::int32_t> surfel_opposite;
-  std::vector<std::uint64_t> surfel_voxel;    ///< linear index of the voxel's lower corner
+  /// Linear index of the voxel's lower corner. Nothing after the construction needs it (graph,
+  /// simplification, refinement): callers short of memory may release it (8 B per surfel).
+  std::vector<std::uint64_t> surfel_voxel;
   std::vector<float> cvertex;                 ///< 3 per surfel: average of its node positions
 
   std::size_t num_nodes() const noexcept { return node_key.size(); }
-  std::size_t num_surfels() const noexcept { return surfel_voxel.size(); }
+  std::size_t num_surfels() const noexcept {
+    return surfel_offset.empty() ? 0 : surfel_offset.size() - 1;
+  }
   std::span<const std::uint32_t> nodes_of(std::size_t s) const noexcept {
     return {surfel_nodes.data() + surfel_offset[s], surfel_offset[s + 1] - surfel_offset[s]};
   }
