@@ -42,11 +42,12 @@ Hierarchy check_uniform(const Fixture& f, int levels, const std::string& label,
   const Hierarchy& h = r.hierarchy;
   EXPECT_EQ(r.stats.forced_splits, 0u) << label;
   std::printf("%s: base F %zu, blocks %zu (half %zu, greedy %zu, augmentations %zu)%s, %zu splits, "
-              "%.2fs (placements geodesic %zu euclidean %zu border %zu, unconverged %zu)\n",
+              "%.2fs (placements line %zu geodesic %zu euclidean %zu border %zu, unconverged %zu)\n",
               label.c_str(), r.stats.base_triangles, r.stats.blocks, r.stats.border_half_blocks,
               r.stats.greedy_pairs, r.stats.augmentations, r.stats.quad_fallback ? " quads" : "",
-              r.stats.splits, secs, r.stats.geodesic_placements, r.stats.euclidean_placements,
-              r.stats.border_placements, r.stats.unconverged_projections);
+              r.stats.splits, secs, r.stats.line_placements, r.stats.geodesic_placements,
+              r.stats.euclidean_placements, r.stats.border_placements,
+              r.stats.unconverged_projections);
   CutMesh prev;
   for (int j = 0; j <= levels; ++j) {
     const CutMesh cut = extract_level(h, j);

@@ -75,6 +75,9 @@ struct RefineStats {
   bool quad_fallback = false;         ///< blocks built from three quads per base triangle
   std::size_t splits = 0;             ///< block splits in the hierarchy
   std::size_t forced_splits = 0;      ///< of which forced by a finer split
+  /// Interior vertices on the line along the block normal (the rule); the others are the
+  /// fallback: geodesic or Euclidean midpoint, F_T, projection along ∇f.
+  std::size_t line_placements = 0;
   std::size_t geodesic_placements = 0, euclidean_placements = 0, border_placements = 0;
   std::size_t unconverged_projections = 0;  ///< |T_S| ≥ 1e-3 h after F_S
   std::size_t at_limit_leaves = 0;    ///< leaves above the threshold stopped by a limit

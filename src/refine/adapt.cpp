@@ -6,6 +6,13 @@
 // tangential smoothing F_T and the projection F_S.
 //
 // For an edge (p1, p2) with anchor c-vertices a1, a2:
+//   0. Interior edge (normal_line): the new vertex is the crossing of the iso-surface with the
+//      line along the block normal through the Euclidean midpoint, or through the midpoint moved
+//      by F_T in the block plane, whichever gives the best-shaped four triangles
+//      (place_on_normal_line). Projecting along ∇f instead slides the vertex sideways wherever ∇f
+//      is not normal to the block (coarse blocks, creases), and the children become slivers.
+//      Steps 1–3 below are the fallback when the line gives no acceptable crossing, and border
+//      edges always use them.
 //   1. Start point. Interior edge: A* on G from a1 to a2 (Euclidean heuristic), the polyline
 //      p1, c(path[1]), …, c(path[k−1]), p2 and its point at half length. Edges shorter than
 //      geodesic_min_edge (4h) use the Euclidean midpoint (graph paths are quantised to the voxel
@@ -253,6 +260,131 @@ Placed place_border(const Surface& s, const EdgeInput& in, PathWorkspace& ws) {
   return out;
 }
 
+/// Root of f(q + t·n) = iso nearest t = 0 with |t| ≤ tmax (n unit): the first sign change among
+/// the samples t = ±k·tmax/8 (alternating sides, nearest first), refined by regula falsi
+/// (Illinois) until the bracket is shorter than tol.
+bool line_root(const ScalarField& f, double iso, const Vec3& q, const Vec3& n, double tmax,
+               double tol, Vec3& out) {
+  auto phi = [&](double t) { return f.value(q + t * n) - iso; };
+  const double f0 = phi(0);
+  if (!std::isfinite(f0)) return false;
+  if (f0 == 0) {
+    out = q;
+    return true;
+  }
+  constexpr int kSamples = 8;
+  const double dt = tmax / kSamples;
+  double a = 0, fa = f0, b = 0, fb = 0;
+  bool found = false;
+  double prev_t[2] = {0, 0}, prev_f[2] = {f0, f0};
+  for (int k = 1; k <= kSamples && !found; ++k)
+    for (int side = 0; side < 2 && !found; ++side) {
+      const double t = (side == 0 ? 1 : -1) * k * dt;
+      const double ft = phi(t);
+      if (!std::isfinite(ft)) return false;
+      if ((ft < 0) != (prev_f[side] < 0) || ft == 0) {
+        a = prev_t[side], fa = prev_f[side], b = t, fb = ft;
+        found = true;
+      }
+      prev_t[side] = t, prev_f[side] = ft;
+    }
+  if (!found) return false;
+  int last = 0;
+  for (int it = 0; it < 60 && std::abs(b - a) > tol && fb != 0; ++it) {
+    const double c = (fa * b - fb * a) / (fa - fb);
+    const double fc = phi(c);
+    if (fc == 0) {
+      a = b = c, fb = 0;
+      break;
+    }
+    if ((fc < 0) == (fb < 0)) {
+      b = c, fb = fc;
+      if (last == -1) fa *= 0.5;
+      last = -1;
+    } else {
+      a = c, fa = fc;
+      if (last == 1) fb *= 0.5;
+      last = 1;
+    }
+  }
+  out = q + (std::abs(fa) < std::abs(fb) ? a : b) * n;
+  return true;
+}
+
+/// Smallest angle (degrees) of the four triangles (m, ring[i], ring[i+1]) of a closed ring; −1
+/// when one of them is flipped against n.
+double ring_quality(const EdgeInput& in, const Vec3& m, const Vec3& n) {
+  double q = 180;
+  for (int i = 0; i < 4; ++i) {
+    const Vec3& a = in.ring[i];
+    const Vec3& b = in.ring[(i + 1) % 4];
+    if (!(dot(cross(a - m, b - m), n) > 0)) return -1;
+    q = std::min(q, min_angle(m, a, b));
+  }
+  return q;
+}
+
+/// Largest move of a normal-line placement from the edge midpoint, in edge lengths.
+constexpr double kMaxLineMove = 0.5;
+
+struct LinePlacement {
+  Vec3 position;
+  Vec3 normal;          ///< block normal
+  double quality = -2;  ///< ring_quality of position (−1: a triangle flipped)
+  bool ok = false;      ///< an acceptable crossing was found
+};
+
+/// The new vertex of an interior edge, on the line along the block normal (area-weighted normal
+/// of the block's two triangles) through a point of the block plane: the projection does not
+/// slide sideways, so the four new triangles keep the shape they have in the block's plane.
+/// Points tried: the Euclidean midpoint and F_T moves from it (see `cands`); the crossing whose
+/// four triangles have the largest smallest angle wins (the earliest on ties). A crossing is
+/// rejected when ∇f there is not oriented like the block (the other sheet of a thin part, or a
+/// grazing crossing) or when it lies farther than `ref_tol` from `ref` (when given). `ok` when
+/// some crossing was accepted; `quality` < 0 when all accepted ones flip a triangle.
+LinePlacement place_on_normal_line(const Surface& s, const EdgeInput& in, const Vec3* ref,
+                                   double ref_tol) {
+  LinePlacement out;
+  const Vec3 &v0 = in.ring[0], &p1 = in.ring[1], &w0 = in.ring[2], &p2 = in.ring[3];
+  const Vec3 n = normalized(cross(p1 - v0, p2 - v0) + cross(p2 - w0, p1 - w0));
+  if (!(norm2(n) > 0)) return out;
+  out.normal = n;
+  const double elen = distance(p1, p2);
+  const Vec3 mid = in.p1 + in.fraction * (in.p2 - in.p1);
+  // Orientation of the field gradient relative to the mesh normal, from the edge's endpoints.
+  const double orient = dot(s.field.gradient(p1) + s.field.gradient(p2), n);
+  if (!(std::abs(orient) > 0) || !std::isfinite(orient)) return out;
+  const double tmax = 0.5 * elen + s.h;
+  const double tol = 1e-4 * s.h;
+  auto root = [&](const Vec3& q, Vec3& r) {
+    if (!line_root(s.field, s.iso, q, n, tmax, tol, r)) return false;
+    const Vec3 g = s.field.gradient(r);
+    const double gn = norm(g);
+    if (!(gn > 0) || dot(g, n) * (orient > 0 ? 1 : -1) < 0.2 * gn) return false;
+    return !ref || distance(r, *ref) <= ref_tol;
+  };
+  // F_T in the block plane: s·τ × the tangential umbrella vector for s = 0, ½, 1, … 5/2, each
+  // move capped at |e|/2. On a block whose diagonal is not the ideal one the best point lies
+  // beyond the plain F_T move (measured: gyroid@128, 100k triangles, 4.4 % of the triangles
+  // below 20° with s ≤ 3/2, 3.3 % with s ≤ 5/2).
+  Vec3 mean{};
+  for (int i = 0; i < 4; ++i) mean += in.ring[i];
+  Vec3 u = 0.25 * mean - mid;
+  u = s.tau * (u - dot(u, n) * n);
+  std::array<Vec3, 6> cands;
+  for (int k = 0; k < 6; ++k) cands[k] = mid + capped((0.5 * k) * u, kMaxLineMove * elen);
+  double best_q = -2;
+  for (const Vec3& c : cands) {
+    Vec3 r;
+    if (!root(c, r)) continue;
+    const double q = ring_quality(in, r, n);
+    if (q > best_q) best_q = q, out.position = r;
+  }
+  out.quality = best_q;
+  out.ok = best_q > -2;
+  return out;
+}
+
 }  // namespace
 
 Surface::Surface(const SurfelComplex& sc_, const ConnectivityGraph& g_, const ScalarField& field_,
@@ -283,6 +415,36 @@ Placed place_vertex(const Surface& s, const EdgeInput& in, PathWorkspace& ws) {
     }
   }
   if (!geodesic) p = in.p1 + in.fraction * (in.p2 - in.p1);
+  ProjectOptions po;
+  po.max_steps = 5;
+  po.tolerance = 1e-3 * s.h;
+  po.max_step = step_cap(s, in);
+  LinePlacement lp;
+  if (in.ring_size == 4) {
+    // Which sheet is the right one. Analytic fields: the crossing stays within |e|/2 of the
+    // geodesic point (long edges). Sampled fields: the trilinear interpolant of noisy data forms
+    // small sheets at the voxel scale, which the line can cross first; the crossing must lie
+    // within |e|/4 of the plain projection of the start point (CT head at 20k–88k triangles:
+    // RMS distance 0.16 voxel on average instead of 0.20 without this check, 0.18 before
+    // normal-line placement).
+    Vec3 ref = p;
+    const Vec3* check = geodesic ? &ref : nullptr;
+    double ref_tol = 0.5 * elen;
+    if (!s.field.is_analytic()) {
+      ref = project_to_iso(s.field, s.iso, p, po).point;
+      check = &ref;
+      ref_tol = 0.25 * elen;
+    }
+    lp = place_on_normal_line(s, in, check, ref_tol);
+    if (lp.ok && lp.quality >= 0) {
+      out.position = lp.position;
+      out.kind = PlacementKind::normal_line;
+      out.anchor = greedy_walk(s.g, sc, mid_anchor, out.position);
+      return out;
+    }
+  }
+  // Fallback (no crossing on the normal line, one on another sheet, or flipped triangles): the
+  // paper's placement, kept only when it flips nothing the line placement flips.
   out.kind = geodesic ? PlacementKind::geodesic : PlacementKind::euclidean;
   // F_T: tangential part of the umbrella vector.
   if (in.ring_size > 0 && s.tau > 0) {
@@ -294,13 +456,14 @@ Placed place_vertex(const Surface& s, const EdgeInput& in, PathWorkspace& ws) {
     n = gn > 0 && std::isfinite(gn) ? n / gn : ring_normal(in, p);
     p += capped(s.tau * (u - dot(u, n) * n), kMaxSmoothing * elen);
   }
-  ProjectOptions po;
-  po.max_steps = 5;
-  po.tolerance = 1e-3 * s.h;
-  po.max_step = step_cap(s, in);
   const ProjectResult r = project_to_iso(s.field, s.iso, p, po);
   out.position = r.point;
   out.converged = r.converged;
+  if (lp.ok && !(ring_quality(in, out.position, lp.normal) > lp.quality)) {
+    out.position = lp.position;
+    out.kind = PlacementKind::normal_line;
+    out.converged = true;
+  }
   out.anchor = greedy_walk(s.g, sc, mid_anchor, out.position);
   return out;
 }

@@ -226,7 +226,8 @@ class Refiner {
         const std::uint32_t v = forest_.vertex_of_split(order[i]);
         pos_[v] = placed[i].position;
         anchor_[v] = placed[i].anchor;
-        ++(placed[i].kind == PlacementKind::geodesic    ? stats_.geodesic_placements
+        ++(placed[i].kind == PlacementKind::normal_line ? stats_.line_placements
+           : placed[i].kind == PlacementKind::geodesic  ? stats_.geodesic_placements
            : placed[i].kind == PlacementKind::euclidean ? stats_.euclidean_placements
                                                         : stats_.border_placements);
         stats_.unconverged_projections += placed[i].converged ? 0 : 1;

@@ -42,7 +42,7 @@ struct EdgeInput {
   double fraction = 0.5;         ///< position along the geodesic (0.5: midpoint)
 };
 
-enum class PlacementKind : std::uint8_t { geodesic, euclidean, border };
+enum class PlacementKind : std::uint8_t { geodesic, euclidean, border, normal_line };
 
 struct Placed {
   Vec3 position;
@@ -51,8 +51,10 @@ struct Placed {
   bool converged = true;  ///< |T_S| < 1e-3 h after the projection
 };
 
-/// Places a new vertex (ALGORITHM.md 2.9): geodesic point on G (border: on the border curve),
-/// tangential smoothing F_T, projection F_S, new anchor by a greedy walk. Deterministic; safe to
+/// Places a new vertex (ALGORITHM.md 2.9). Interior edges: on the line along the block normal
+/// through the Euclidean midpoint or an F_T move of it (normal_line); fallback and border edges:
+/// geodesic point on G (border: on the border curve), tangential smoothing F_T, projection F_S.
+/// New anchor by a greedy walk. Deterministic; safe to
 /// call concurrently with distinct workspaces.
 Placed place_vertex(const Surface& s, const EdgeInput& in, PathWorkspace& ws);
 
