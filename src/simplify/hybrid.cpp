@@ -14,8 +14,7 @@
 // their whole component. Each triangle must be produced once per cell vertex it has, always with
 // the same orientation; cells where that fails are reported for escalation.
 #include <algorithm>
-#include <map>
-#include <unordered_map>
+#include <bit>
 #include <unordered_set>
 
 #include "voronoi.h"
@@ -33,7 +32,18 @@ HybridResult hybrid_triangles(const SurfelComplex& sc, const std::vector<std::ui
   struct HalfEdge {
     std::uint32_t c, a, b, label;
   };
+  // Memory (docs/SIMPLIFICATION.md): the half-edges are counted first and stored once (no
+  // regrowth copies); node sets are bitsets; produced triangles are a sorted vector, not a map.
   std::vector<HalfEdge> he;
+  {
+    std::size_t count = 0;
+    for (std::uint32_t u = 0; u < sc.num_surfels(); ++u) {
+      const std::uint32_t c = cell[u];
+      if (c == kNone) continue;
+      for (const std::int32_t o : sc.opposites_of(u)) count += !(o >= 0 && cell[o] == c);
+    }
+    he.reserve(count);
+  }
   for (std::uint32_t u = 0; u < sc.num_surfels(); ++u) {
     const std::uint32_t c = cell[u];
     if (c == kNone) continue;
@@ -50,7 +60,6 @@ HybridResult hybrid_triangles(const SurfelComplex& sc, const std::vector<std::ui
   });
 
   // Kept nodes: every boundary node of a cone cell.
-  std::unordered_map<std::uint32_t, std::uint32_t> kept;  // node -> vertex id
   std::vector<std::uint32_t> kept_list;
   for (const auto& h : he)
     if (cone[h.c]) kept_list.push_back(h.a);
@@ -61,6 +70,11 @@ HybridResult hybrid_triangles(const SurfelComplex& sc, const std::vector<std::ui
     if (x > y) std::swap(x, y);
     return (std::uint64_t(x) << 32) | y;
   };
+  {
+    std::size_t count = 0;
+    for (const auto& h : he) count += h.label != kBorder && h.c < h.label;
+    pairs.reserve(count);
+  }
   for (const auto& h : he)
     if (h.label != kBorder && h.c < h.label) pairs.push_back(key(h.c, h.label));
   std::sort(pairs.begin(), pairs.end());
@@ -73,51 +87,67 @@ HybridResult hybrid_triangles(const SurfelComplex& sc, const std::vector<std::ui
   // both diagonals are edges already, keep the node instead.
   std::sort(kept_list.begin(), kept_list.end());
   kept_list.erase(std::unique(kept_list.begin(), kept_list.end()), kept_list.end());
-  std::unordered_map<std::uint32_t, std::pair<std::uint32_t, std::uint32_t>> diagonal;
+  // Node → chosen diagonal, in increasing node order (binary search).
+  struct Diagonal {
+    std::uint32_t node, first, second;
+  };
+  std::vector<Diagonal> diagonal;
   {
-    std::vector<std::uint32_t> candidates;
-    for (const auto& h : he) candidates.push_back(h.a);
-    std::sort(candidates.begin(), candidates.end());
-    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    std::vector<std::uint64_t> candidate((sc.num_nodes() + 63) / 64, 0);  // cell boundary nodes
+    for (const auto& h : he) candidate[h.a >> 6] |= std::uint64_t{1} << (h.a & 63);
     std::array<std::int32_t, 4> fan;
     std::unordered_set<std::uint64_t> chosen;
-    for (auto n : candidates) {
-      if (std::binary_search(kept_list.begin(), kept_list.end(), n)) continue;
-      if (!ccw_fan(sc, n, fan)) continue;
-      std::array<std::uint32_t, 4> c;
-      for (int q = 0; q < 4; ++q) c[q] = cell[static_cast<std::uint32_t>(fan[q])];
-      bool distinct = true;
-      for (int i = 0; i < 4; ++i)
-        for (int j = i + 1; j < 4; ++j) distinct &= c[i] != c[j];
-      if (!distinct) continue;
-      auto taken = [&](std::uint32_t x, std::uint32_t y) {
-        return adjacent(x, y) || chosen.count(key(x, y)) != 0;
-      };
-      const bool ac = taken(c[0], c[2]), bd = taken(c[1], c[3]);
-      if (ac && bd) {
-        kept_list.push_back(n);  // both diagonals exist: the node becomes a vertex
-        continue;
+    for (std::size_t word = 0; word < candidate.size(); ++word) {
+      for (std::uint64_t bits = candidate[word]; bits != 0; bits &= bits - 1) {
+        const auto n = static_cast<std::uint32_t>(64 * word + std::countr_zero(bits));
+        if (std::binary_search(kept_list.begin(), kept_list.end(), n)) continue;
+        if (!ccw_fan(sc, n, fan)) continue;
+        std::array<std::uint32_t, 4> c;
+        for (int q = 0; q < 4; ++q) c[q] = cell[static_cast<std::uint32_t>(fan[q])];
+        bool distinct = true;
+        for (int i = 0; i < 4; ++i)
+          for (int j = i + 1; j < 4; ++j) distinct &= c[i] != c[j];
+        if (!distinct) continue;
+        auto taken = [&](std::uint32_t x, std::uint32_t y) {
+          return adjacent(x, y) || chosen.count(key(x, y)) != 0;
+        };
+        const bool ac = taken(c[0], c[2]), bd = taken(c[1], c[3]);
+        if (ac && bd) {
+          kept_list.push_back(n);  // both diagonals exist: the node becomes a vertex
+          continue;
+        }
+        bool use_ac = !ac;
+        if (!ac && !bd) {
+          const double lac = distance(sc.cvertex_position(centre[c[0]]), sc.cvertex_position(centre[c[2]]));
+          const double lbd = distance(sc.cvertex_position(centre[c[1]]), sc.cvertex_position(centre[c[3]]));
+          use_ac = lac < lbd || (lac == lbd && std::min(c[0], c[2]) < std::min(c[1], c[3]));
+        }
+        diagonal.push_back(use_ac ? Diagonal{n, c[0], c[2]} : Diagonal{n, c[1], c[3]});
+        chosen.insert(use_ac ? key(c[0], c[2]) : key(c[1], c[3]));
       }
-      bool use_ac = !ac;
-      if (!ac && !bd) {
-        const double lac = distance(sc.cvertex_position(centre[c[0]]), sc.cvertex_position(centre[c[2]]));
-        const double lbd = distance(sc.cvertex_position(centre[c[1]]), sc.cvertex_position(centre[c[3]]));
-        use_ac = lac < lbd || (lac == lbd && std::min(c[0], c[2]) < std::min(c[1], c[3]));
-      }
-      diagonal[n] = use_ac ? std::make_pair(c[0], c[2]) : std::make_pair(c[1], c[3]);
-      chosen.insert(use_ac ? key(c[0], c[2]) : key(c[1], c[3]));
     }
   }
   std::sort(kept_list.begin(), kept_list.end());
   kept_list.erase(std::unique(kept_list.begin(), kept_list.end()), kept_list.end());
-  for (std::size_t i = 0; i < kept_list.size(); ++i)
-    kept.emplace(kept_list[i], ncell + static_cast<std::uint32_t>(i));
-  out.kept_nodes = kept_list;
-  auto is_kept = [&](std::uint32_t n) { return kept.count(n) != 0; };
+  // Kept node kept_list[i] is vertex ncell + i.
+  auto is_kept = [&](std::uint32_t n) {
+    return std::binary_search(kept_list.begin(), kept_list.end(), n);
+  };
+  auto kept_vertex = [&](std::uint32_t n) {
+    return ncell + static_cast<std::uint32_t>(
+                       std::lower_bound(kept_list.begin(), kept_list.end(), n) - kept_list.begin());
+  };
+  auto find_diagonal = [&](std::uint32_t n) -> const Diagonal* {
+    auto it = std::lower_bound(diagonal.begin(), diagonal.end(), n,
+                               [](const Diagonal& d, std::uint32_t key) { return d.node < key; });
+    return it != diagonal.end() && it->node == n ? &*it : nullptr;
+  };
 
   // Links and triangles, cell by cell.
   constexpr std::uint32_t kBreak = kNone;
-  std::map<std::array<std::uint32_t, 3>, std::pair<int, int>> count;  // canonical -> (n, cells)
+  // Every triangle as produced by each of its cells (canonical rotation: smallest id first).
+  std::vector<std::array<std::uint32_t, 3>> produced;
+  produced.reserve(he.size());  // about one per boundary half-edge at most, in practice
   std::vector<std::uint32_t> link;
   std::vector<std::uint8_t> problem(ncell, 0);
   for (std::size_t begin = 0; begin < he.size();) {
@@ -132,10 +162,10 @@ HybridResult hybrid_triangles(const SurfelComplex& sc, const std::vector<std::ui
       const HalfEdge& h = he[at];
       const bool ka = is_kept(h.a), kb = is_kept(h.b);
       if (ka) {
-        link.push_back(kept[h.a]);
-      } else if (auto it = diagonal.find(h.a); it != diagonal.end()) {
-        if (it->second.first == x) link.push_back(it->second.second);
-        else if (it->second.second == x) link.push_back(it->second.first);
+        link.push_back(kept_vertex(h.a));
+      } else if (const Diagonal* d = find_diagonal(h.a)) {
+        if (d->first == x) link.push_back(d->second);
+        else if (d->second == x) link.push_back(d->first);
       }
       if (!(ka && kb)) link.push_back(h.label == kBorder ? kBreak : h.label);
       auto it = std::lower_bound(he.begin() + begin, he.begin() + end, h.b,
@@ -167,24 +197,40 @@ HybridResult hybrid_triangles(const SurfelComplex& sc, const std::vector<std::ui
       std::array<std::uint32_t, 3> t{x, p, q};
       const auto r = std::min_element(t.begin(), t.end()) - t.begin();
       std::rotate(t.begin(), t.begin() + r, t.end());
-      int cells_in = 0;
-      for (auto v : t) cells_in += v < ncell;
-      auto& e = count[t];
-      ++e.first;
-      e.second = cells_in;
+      produced.push_back(t);
     }
     begin = end;
   }
+  std::vector<std::uint32_t>().swap(link);
+  std::vector<HalfEdge>().swap(he);
+  std::vector<std::uint64_t>().swap(pairs);
+  std::vector<Diagonal>().swap(diagonal);
+  out.kept_nodes = std::move(kept_list);
   // Each triangle once per cell vertex; the reversed triangle must not occur.
-  for (const auto& [t, e] : count) {
-    std::array<std::uint32_t, 3> rev{t[0], t[2], t[1]};
-    const bool reversed = count.count(rev) != 0;
-    if (e.first != e.second || reversed) {
+  std::sort(produced.begin(), produced.end());
+  std::vector<std::uint8_t> keep;  // per distinct triangle, in order
+  std::size_t valid = 0;
+  for (std::size_t i = 0; i < produced.size();) {
+    const auto t = produced[i];
+    std::size_t j = i + 1;
+    while (j < produced.size() && produced[j] == t) ++j;
+    int cells_in = 0;
+    for (auto v : t) cells_in += v < ncell;
+    const std::array<std::uint32_t, 3> rev{t[0], t[2], t[1]};
+    const bool reversed = std::binary_search(produced.begin(), produced.end(), rev);
+    const bool ok = static_cast<std::size_t>(cells_in) == j - i && !reversed;
+    if (!ok)
       for (auto v : t)
         if (v < ncell) problem[v] = 1;
-      continue;
-    }
-    out.triangles.push_back(t);
+    keep.push_back(ok);
+    valid += ok;
+    i = j;
+  }
+  out.triangles.reserve(valid);
+  for (std::size_t i = 0, k = 0; i < produced.size(); ++k) {
+    const auto t = produced[i];
+    while (i < produced.size() && produced[i] == t) ++i;
+    if (keep[k]) out.triangles.push_back(t);
   }
   for (std::uint32_t c = 0; c < ncell; ++c)
     if (problem[c]) out.problem_cells.push_back(c);
