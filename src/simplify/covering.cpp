@@ -90,7 +90,6 @@ Covering build_covering(const SurfelComplex& sc, const ConnectivityGraph& g,
     for (std::uint32_t d = 0; d < cover.num_disks(); ++d) centre_of_cell[d] = cover.centre(d);
   };
   std::vector<std::uint32_t> nbrs;
-  std::vector<std::array<std::uint32_t, 3>> triangles;
   std::vector<std::uint32_t> recheck;
   // Cells whose violations could not be repaired (their component made no progress): they are
   // meshed as cones (or split into single surfels) by the hybrid triangulation.
@@ -114,8 +113,7 @@ Covering build_covering(const SurfelComplex& sc, const ConnectivityGraph& g,
     }
     refresh_centres();
     std::vector<std::uint32_t> global_bad;
-    dual_triangles(sc, vor.cells(), centre_of_cell, triangles, global_bad,
-                   &stats.violations_by_kind);
+    dual_violations(sc, vor.cells(), centre_of_cell, global_bad, &stats.violations_by_kind);
     for (auto c : global_bad) {
       bad.push_back(c);
       if (!kinds.count(c)) kinds[c] = kFanPinch;

@@ -97,9 +97,8 @@ CoveringValidation validate_covering(const SurfelComplex& sc, const Connectivity
   auto is_cone = [&](std::uint32_t c) { return !cov.cone.empty() && cov.cone[c]; };
   for (const auto& [c, x] : cells)
     if (!is_cone(c) && vor.check_cell(c, nb) != kOk) ++out.violated_cells;
-  std::vector<std::array<std::uint32_t, 3>> tris;
   std::vector<std::uint32_t> bad;
-  dual_triangles(sc, vor.cells(), cov.centre, tris, bad, nullptr);
+  dual_violations(sc, vor.cells(), cov.centre, bad, nullptr);
   for (auto c : bad) out.violated_cells += !is_cone(c);
   return out;
 }

@@ -349,53 +349,57 @@ int Voronoi::check_cell(std::uint32_t c, std::vector<std::uint32_t>& neighbours)
   return kOk;
 }
 
-void scan_junctions(const SurfelComplex& sc, const std::vector<std::uint32_t>& cell,
-                    std::vector<Junction>& junctions, std::vector<std::uint32_t>& pinched) {
-  junctions.clear();
-  pinched.clear();
+namespace {
+
+enum class JunctionKind { none, junction, pinched };
+
+/// The junction at node n: `runs` holds the r distinct cells of its complete fan (CCW seen from
+/// outside) for a junction (r = 3 or 4), or the cells of a fan pinch (a cell twice apart).
+JunctionKind junction_at(const SurfelComplex& sc, const std::vector<std::uint32_t>& cell,
+                         std::uint32_t n, std::array<std::uint32_t, 4>& runs, int& r) {
   std::array<std::int32_t, 4> fan;
-  for (std::uint32_t n = 0; n < sc.num_nodes(); ++n) {
-    if (!ccw_fan(sc, n, fan)) continue;
-    std::array<std::uint32_t, 4> c;
-    bool skip = false;
-    for (int q = 0; q < 4; ++q) {
-      c[q] = cell[static_cast<std::uint32_t>(fan[q])];
-      if (c[q] == Voronoi::kNone) skip = true;
-    }
-    if (skip) continue;
-    // Cyclic runs of equal cells.
-    std::array<std::uint32_t, 4> runs;
-    int r = 0;
-    for (int q = 0; q < 4; ++q)
-      if (r == 0 || runs[r - 1] != c[q]) runs[r++] = c[q];
-    if (r > 1 && runs[0] == runs[r - 1]) --r;
-    if (r <= 2) continue;  // inside a cell or on a pair boundary
-    bool repeat = false;
-    for (int i = 0; i < r; ++i)
-      for (int j = i + 1; j < r; ++j)
-        if (runs[i] == runs[j]) repeat = true;
-    if (repeat) {
-      for (int i = 0; i < r; ++i) pinched.push_back(runs[i]);
-      continue;
-    }
-    Junction j{n, static_cast<std::uint8_t>(r), runs};
-    junctions.push_back(j);
+  if (!ccw_fan(sc, n, fan)) return JunctionKind::none;
+  std::array<std::uint32_t, 4> c;
+  for (int q = 0; q < 4; ++q) {
+    c[q] = cell[static_cast<std::uint32_t>(fan[q])];
+    if (c[q] == Voronoi::kNone) return JunctionKind::none;
   }
-  std::sort(pinched.begin(), pinched.end());
-  pinched.erase(std::unique(pinched.begin(), pinched.end()), pinched.end());
+  // Cyclic runs of equal cells.
+  r = 0;
+  for (int q = 0; q < 4; ++q)
+    if (r == 0 || runs[r - 1] != c[q]) runs[r++] = c[q];
+  if (r > 1 && runs[0] == runs[r - 1]) --r;
+  if (r <= 2) return JunctionKind::none;  // inside a cell or on a pair boundary
+  for (int i = 0; i < r; ++i)
+    for (int j = i + 1; j < r; ++j)
+      if (runs[i] == runs[j]) return JunctionKind::pinched;
+  return JunctionKind::junction;
 }
+
+}  // namespace
 
 }  // namespace adamesh::detail
 
 namespace adamesh::detail {
 
-void dual_triangles(const SurfelComplex& sc, const std::vector<std::uint32_t>& cell,
-                    const std::vector<std::uint32_t>& centre_of_cell,
-                    std::vector<std::array<std::uint32_t, 3>>& triangles,
-                    std::vector<std::uint32_t>& violated, std::vector<std::size_t>* kinds) {
-  std::vector<Junction> junctions;
+void dual_violations(const SurfelComplex& sc, const std::vector<std::uint32_t>& cell,
+                     const std::vector<std::uint32_t>& centre_of_cell,
+                     std::vector<std::uint32_t>& violated, std::vector<std::size_t>* kinds) {
+  // Memory (docs/SIMPLIFICATION.md): junctions are visited twice instead of being stored (first
+  // for pinches and the triangle count, then to build the triangles); lists are sized once.
   std::vector<std::uint32_t> pinched;
-  scan_junctions(sc, cell, junctions, pinched);
+  std::size_t max_triangles = 0;
+  std::array<std::uint32_t, 4> runs;
+  int r = 0;
+  for (std::uint32_t n = 0; n < sc.num_nodes(); ++n) {
+    const JunctionKind kind = junction_at(sc, cell, n, runs, r);
+    if (kind == JunctionKind::pinched)
+      for (int i = 0; i < r; ++i) pinched.push_back(runs[i]);
+    else if (kind == JunctionKind::junction)
+      max_triangles += static_cast<std::size_t>(r - 2);
+  }
+  std::sort(pinched.begin(), pinched.end());
+  pinched.erase(std::unique(pinched.begin(), pinched.end()), pinched.end());
   violated.insert(violated.end(), pinched.begin(), pinched.end());
   if (kinds) (*kinds)[kFanPinch] += pinched.size();
 
@@ -405,11 +409,20 @@ void dual_triangles(const SurfelComplex& sc, const std::vector<std::uint32_t>& c
     return (std::uint64_t(a) << 32) | b;
   };
   std::vector<std::uint64_t> edges;
+  auto cross = [&](std::uint32_t u, std::int32_t o) {
+    return o >= 0 && cell[o] != cell[u] && cell[o] != Voronoi::kNone && cell[u] < cell[o];
+  };
+  {
+    std::size_t count = 0;
+    for (std::uint32_t u = 0; u < sc.num_surfels(); ++u)
+      if (cell[u] != Voronoi::kNone)
+        for (auto o : sc.opposites_of(u)) count += cross(u, o);
+    edges.reserve(count);
+  }
   for (std::uint32_t u = 0; u < sc.num_surfels(); ++u) {
     if (cell[u] == Voronoi::kNone) continue;
     for (auto o : sc.opposites_of(u))
-      if (o >= 0 && cell[o] != cell[u] && cell[o] != Voronoi::kNone && cell[u] < cell[o])
-        edges.push_back(key(cell[u], cell[o]));
+      if (cross(u, o)) edges.push_back(key(cell[u], cell[o]));
   }
   std::sort(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
@@ -420,11 +433,19 @@ void dual_triangles(const SurfelComplex& sc, const std::vector<std::uint32_t>& c
            added.count(k) != 0;
   };
 
-  triangles.clear();
-  for (const auto& j : junctions) {
-    const auto& c = j.cell;
-    if (j.count == 3) {
-      triangles.push_back({c[0], c[1], c[2]});
+  // The dual's triangles, each as its sorted cell triple (only duplicates matter here).
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  triangles.reserve(max_triangles);
+  auto emit = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+    std::array<std::uint32_t, 3> t{a, b, c};
+    std::sort(t.begin(), t.end());
+    triangles.push_back(t);
+  };
+  for (std::uint32_t n = 0; n < sc.num_nodes(); ++n) {
+    if (junction_at(sc, cell, n, runs, r) != JunctionKind::junction) continue;
+    const auto& c = runs;
+    if (r == 3) {
+      emit(c[0], c[1], c[2]);
       continue;
     }
     auto len = [&](std::uint32_t a, std::uint32_t b) {
@@ -445,27 +466,20 @@ void dual_triangles(const SurfelComplex& sc, const std::vector<std::uint32_t>& c
       use_ac = lac < lbd || (lac == lbd && std::min(c[0], c[2]) < std::min(c[1], c[3]));
     }
     if (use_ac) {
-      triangles.push_back({c[0], c[1], c[2]});
-      triangles.push_back({c[0], c[2], c[3]});
+      emit(c[0], c[1], c[2]);
+      emit(c[0], c[2], c[3]);
       added.insert(key(c[0], c[2]));
     } else {
-      triangles.push_back({c[0], c[1], c[3]});
-      triangles.push_back({c[1], c[2], c[3]});
+      emit(c[0], c[1], c[3]);
+      emit(c[1], c[2], c[3]);
       added.insert(key(c[1], c[3]));
     }
   }
   // Two junctions with the same three cells give the same triangle twice.
-  std::vector<std::pair<std::array<std::uint32_t, 3>, std::size_t>> sorted;
-  sorted.reserve(triangles.size());
-  for (std::size_t t = 0; t < triangles.size(); ++t) {
-    auto s = triangles[t];
-    std::sort(s.begin(), s.end());
-    sorted.push_back({s, t});
-  }
-  std::sort(sorted.begin(), sorted.end());
-  for (std::size_t i = 1; i < sorted.size(); ++i)
-    if (sorted[i].first == sorted[i - 1].first) {
-      for (auto c : sorted[i].first) violated.push_back(c);
+  std::sort(triangles.begin(), triangles.end());
+  for (std::size_t i = 1; i < triangles.size(); ++i)
+    if (triangles[i] == triangles[i - 1]) {
+      for (auto c : triangles[i]) violated.push_back(c);
       if (kinds) ++(*kinds)[kDuplicate];
     }
   std::sort(violated.begin(), violated.end());

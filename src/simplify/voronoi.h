@@ -95,30 +95,17 @@ class Voronoi {
   std::uint32_t gen_ = 0;
 };
 
-/// One dual triangle (cells, CCW seen from outside) or quad found at a junction node.
-struct Junction {
-  std::uint32_t node;
-  std::uint8_t count;                 ///< 3 or 4 distinct cells
-  std::array<std::uint32_t, 4> cell;  ///< CCW seen from outside
-};
-
-/// Scans every complete fan: junctions with three or four distinct cells, and fan pinches
-/// (reported in `pinched`, as cells). Nodes touching cell kNone are skipped.
-void scan_junctions(const SurfelComplex& sc, const std::vector<std::uint32_t>& cell,
-                    std::vector<Junction>& junctions, std::vector<std::uint32_t>& pinched);
-
 }  // namespace adamesh::detail
 
 namespace adamesh::detail {
 
-/// The dual's triangles for a cell assignment: 3-junctions give one triangle, 4-junctions a
+/// Global checks of the dual of a cell assignment: 3-junctions give one triangle, 4-junctions a
 /// quad split along the shorter centre diagonal unless that pair is already an edge of the
 /// dual. Cells involved in unsplittable quads, fan pinches or duplicate triangles are added to
-/// `violated` (kinds 4 and 5 counted in `kinds`).
-void dual_triangles(const SurfelComplex& sc, const std::vector<std::uint32_t>& cell,
-                    const std::vector<std::uint32_t>& centre_of_cell,
-                    std::vector<std::array<std::uint32_t, 3>>& triangles,
-                    std::vector<std::uint32_t>& violated, std::vector<std::size_t>* kinds);
+/// `violated` (sorted, unique; kinds 4 and 5 counted in `kinds`).
+void dual_violations(const SurfelComplex& sc, const std::vector<std::uint32_t>& cell,
+                     const std::vector<std::uint32_t>& centre_of_cell,
+                     std::vector<std::uint32_t>& violated, std::vector<std::size_t>* kinds);
 
 }  // namespace adamesh::detail
 
