@@ -103,6 +103,7 @@ std::vector<CompTopo> mesh_topology(const Mesh& m, const std::vector<std::uint32
       boundary_next[h.a] = h.b;
     }
   }
+  std::vector<HalfEdge>().swap(he);  // memory: not needed for the vertex links
   std::vector<std::uint8_t> seen(m.num_vertices(), 0);
   for (const auto& [start, next] : boundary_next) {
     if (seen[start]) continue;
@@ -226,7 +227,7 @@ BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
     std::vector<std::uint32_t> cells = cov.cell;
     for (std::size_t v = 0; v < cells.size(); ++v)
       if (cells[v] != Covering::kNoCell && cov.fallback[g.component[v]]) cells[v] = Covering::kNoCell;
-    const HybridResult hr = hybrid_triangles(sc, cells, cov.centre, cov.cone);
+    HybridResult hr = hybrid_triangles(sc, cells, cov.centre, cov.cone);
     if (!hr.problem_cells.empty()) {  // escalate: split cells into surfels, then fall back
       std::vector<std::uint8_t> split(cov.centre.size(), 0);
       for (auto c : hr.problem_cells) {
@@ -254,6 +255,16 @@ BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
     for (const auto& t : hr.triangles)
       for (auto x : t)
         if (x < ncell) used[x] = 1;
+    {  // size the mesh once (fallback components, rare, may still grow it)
+      std::size_t nv = hr.kept_nodes.size();
+      for (std::uint32_t c = 0; c < ncell; ++c)
+        nv += used[c] && !cov.fallback[g.component[cov.centre[c]]];
+      bm.mesh.positions.reserve(3 * nv);
+      bm.mesh.triangles.reserve(3 * hr.triangles.size());
+      bm.anchor.reserve(nv);
+      bm.border.reserve(nv);
+      bm.component.reserve(nv);
+    }
     for (std::uint32_t c = 0; c < ncell; ++c) {
       const auto comp = g.component[cov.centre[c]];
       if (cov.fallback[comp] || !used[c]) continue;
@@ -305,6 +316,7 @@ BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
     }
     for (const auto& t : hr.triangles)
       bm.mesh.add_triangle(vertex_of[t[0]], vertex_of[t[1]], vertex_of[t[2]]);
+    std::vector<std::array<std::uint32_t, 3>>().swap(hr.triangles);
     // Fallback components: fan every surfel polygon around its c-vertex.
     std::unordered_map<std::uint32_t, std::uint32_t> vertex_of_node;
     for (std::uint32_t s = 0; s < sc.num_surfels(); ++s) {
