@@ -1,5 +1,6 @@
 // `adamesh extract`: volume or implicit input → surfel complex → connectivity graph → disk and
 // Voronoi covering → base mesh → 4-8 refinement hierarchy (extract_refine.cpp).
+#include <malloc.h>
 #include <tbb/global_control.h>
 
 #include <cmath>
@@ -84,6 +85,11 @@ int cmd_extract(const Argv& argv) {
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                     static_cast<std::size_t>(*t));
   }
+
+  // Memory (docs/SIMPLIFICATION.md): blocks of 1 MiB and more get their own mappings, returned
+  // to the system when freed. glibc otherwise raises this threshold as large blocks are freed
+  // and serves them from the heap, where the stages' freed arrays fragment and stay resident.
+  mallopt(M_MMAP_THRESHOLD, 1 << 20);
 
   Progress progress(quiet);
   Stopwatch clock;
