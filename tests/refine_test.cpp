@@ -119,6 +119,27 @@ TEST(Refine, UniformCoarseBase) {
   check_uniform(make_fixture("shape:torus", 64, 0, so), 5, "torus@64 r_max 0.3");
 }
 
+/// Large bases pair their blocks by local augmenting paths (refine.h local_matching_from); forced
+/// here on small ones: a perfect matching (no quad fallback), found mostly inside the balls, and
+/// uniform levels as valid as with the global search. wavy_sheet has border half-blocks, two_tori
+/// two closed components.
+TEST(Refine, LocalMatchingGivesValidBlocks) {
+  for (const char* shape : {"shape:gyroid", "shape:wavy_sheet", "shape:two_tori"}) {
+    const Fixture f = make_fixture(shape, 48);
+    RefineOptions o;
+    o.local_matching_from = 0;
+    o.mode = RefineMode::uniform;
+    o.levels = 0;
+    const RefineResult r = refine(f.sc, f.base, *f.in.field, o);
+    EXPECT_FALSE(r.stats.quad_fallback) << shape;
+    EXPECT_GT(r.stats.local_augmentations, 0u) << shape;
+    EXPECT_LE(r.stats.local_augmentations, r.stats.augmentations) << shape;
+    EXPECT_EQ(2 * r.stats.blocks - r.stats.border_half_blocks, r.stats.base_triangles) << shape;
+    if (std::string(shape) == "shape:wavy_sheet") EXPECT_GT(r.stats.border_half_blocks, 0u);
+    check_uniform(f, 3, std::string(shape) + "@48 local matching", o);
+  }
+}
+
 TEST(Refine, UniformWavySheetBorderOnVolumeFaces) {
   const Fixture f = make_fixture("shape:wavy_sheet", 48);
   const Hierarchy h = check_uniform(f, 4, "wavy_sheet@48");

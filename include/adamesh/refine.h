@@ -62,6 +62,10 @@ struct RefineOptions {
   /// Testing: build blocks with the fallback (three quads per base triangle) even when a perfect
   /// matching exists.
   bool force_quad_blocks = false;
+  /// Base meshes with at least this many triangles pair their blocks by augmenting paths inside
+  /// small balls around the unmatched triangles first (the global search costs O(n·m) on large
+  /// noisy bases); smaller ones use the global search only. Testing sets 0 to force the local path.
+  std::size_t local_matching_from = 16384;
   /// Optional progress report: stage name and fraction done.
   std::function<void(const char* stage, double fraction)> progress;
 };
@@ -70,6 +74,7 @@ struct RefineStats {
   std::size_t base_triangles = 0;     ///< triangles of the input base mesh
   std::size_t greedy_pairs = 0;       ///< blocks found by the greedy seed (doubled graph pairs)
   std::size_t augmentations = 0;      ///< blossom augmentations after the seed
+  std::size_t local_augmentations = 0;  ///< of which found inside local balls
   std::size_t blocks = 0;             ///< blocks of M0 (pairs + border half-blocks)
   std::size_t border_half_blocks = 0;
   bool quad_fallback = false;         ///< blocks built from three quads per base triangle

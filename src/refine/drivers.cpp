@@ -298,12 +298,13 @@ RefineResult refine_impl(const SurfelComplex& sc, const BaseMesh& bm, const Scal
   st.base_triangles = tris.size();
 
   Blocks blocks;
-  if (!opt.force_quad_blocks) blocks = match_blocks(pos, tris);
+  if (!opt.force_quad_blocks) blocks = match_blocks(pos, tris, opt.local_matching_from);
   std::vector<std::array<std::uint32_t, 3>> labelled;
   if (blocks.perfect) {
     labelled = std::move(blocks.labelled);
     st.greedy_pairs = blocks.greedy_pairs;
     st.augmentations = blocks.augmentations;
+    st.local_augmentations = blocks.local_augmentations;
     st.blocks = blocks.blocks;
     st.border_half_blocks = blocks.border_half_blocks;
   } else {

@@ -78,9 +78,13 @@ struct Blocks {
   std::vector<std::array<std::uint32_t, 3>> labelled;  ///< (v0, v1, v2), (v1, v2) the diagonal
   bool perfect = false;
   std::size_t greedy_pairs = 0, augmentations = 0, blocks = 0, border_half_blocks = 0;
+  std::size_t local_augmentations = 0;  ///< of the augmentations, found inside local balls
 };
+/// Base meshes with at least `local_from` triangles augment the greedy seed inside small balls
+/// first (blocks.cpp); smaller ones use Boost's global search only.
 Blocks match_blocks(const std::vector<Vec3>& positions,
-                    const std::vector<std::array<std::uint32_t, 3>>& triangles);
+                    const std::vector<std::array<std::uint32_t, 3>>& triangles,
+                    std::size_t local_from);
 
 /// Fallback blocks: every base triangle becomes three quads (corner, edge midpoints, centroid;
 /// new vertices placed on the surface), each quad a block of two triangles. Appends the new
