@@ -38,6 +38,14 @@ nlohmann::json measure(const Mesh& mesh, const Input& in, double iso, int thread
           {"q_mean", q.q_mean}};
 }
 
+/// Triangles of the marching cubes mesh of `sc` (each surfel polygon as a fan).
+std::size_t marching_cubes_triangles(const SurfelComplex& sc) {
+  std::size_t n = 0;
+  for (std::size_t s = 0; s < sc.num_surfels(); ++s)
+    n += sc.surfel_offset[s + 1] - sc.surfel_offset[s] - 2;
+  return n;
+}
+
 }  // namespace
 
 std::vector<OptionSpec> refine_option_specs() {
@@ -45,7 +53,8 @@ std::vector<OptionSpec> refine_option_specs() {
       {"-o", true, "write the refined mesh here (.ply .obj .off .stl)"},
       {"--levels", true, "uniform refinement: K levels; the output is M_K"},
       {"--max-error", true,
-       "adaptive: every triangle within E of the surface, world units (default 0.25 voxel)"},
+       "adaptive: every triangle within E of the surface, world units (default: 0.25 voxel, "
+       "at most as many triangles as marching cubes)"},
       {"--triangles", true, "adaptive: the N-triangle mesh, worst triangles split first"},
       {"--hierarchy", true, "write the refinement hierarchy (.amh, see docs/HIERARCHY.md)"},
   };
@@ -76,9 +85,13 @@ RefineStage run_refine_stage(const Args& args, const Input& in, double iso, cons
       ro.max_error = *e;
       chosen << "--max-error " << *e << " (" << *e / h << " voxel)";
     } else {
+      // The default never gives more triangles than marching cubes would (noisy or label
+      // volumes: the frog reached 4.7M triangles at 0.25 voxel, three times marching cubes).
       ro.max_error = kDefaultMaxError * h;
+      ro.max_triangles = marching_cubes_triangles(sc);
       chosen << "--max-error " << ro.max_error << " (" << kDefaultMaxError
-             << " voxel, the default)";
+             << " voxel, the default), at most " << ro.max_triangles
+             << " triangles (marching cubes' count)";
     }
   }
   ro.progress = [&](const char*, double f) { progress.fraction(f); };
@@ -144,7 +157,9 @@ RefineStage run_refine_stage(const Args& args, const Input& in, double iso, cons
   s << "refined (" << chosen.str() << "): " << cut.mesh.num_triangles() << " triangles, "
     << cut.mesh.num_vertices() << " vertices, depth " << cut.max_level << ", " << st.splits
     << " splits (" << st.forced_splits << " forced)";
-  if (st.at_limit_leaves) s << "; " << st.at_limit_leaves << " triangles stopped at a size limit";
+  if (st.at_limit_leaves)
+    s << "; " << st.at_limit_leaves << " triangles above the error bound (stopped at a size limit"
+      << (ro.mode == RefineMode::max_error && ro.max_triangles > 0 ? " or the triangle cap)" : ")");
   out.summary = s.str();
   return out;
 }

@@ -44,7 +44,8 @@ struct RefineOptions {
   /// max_error: E in world units (> 0). Leaves are split until 1.25 × their sampled max |d| ≤ E
   /// (the 15 samples of a triangle can miss its worst point; the metrics sample densely).
   double max_error = 0;
-  /// budget: triangle count not to exceed (> 0). Other adaptive modes: optional cap (0 = none).
+  /// budget: triangle count not to exceed (> 0). Other adaptive modes: optional cap (0 = none);
+  /// max_error with a cap splits the worst leaf first, so the cap leaves the smallest errors.
   std::size_t max_triangles = 0;
   /// Adaptive modes never split a triangle whose refinement edge is below this or whose smallest
   /// altitude is below half this (world units), nor deeper than the level at which uniform
@@ -85,7 +86,7 @@ struct RefineStats {
   std::size_t line_placements = 0;
   std::size_t geodesic_placements = 0, euclidean_placements = 0, border_placements = 0;
   std::size_t unconverged_projections = 0;  ///< |T_S| ≥ 1e-3 h after F_S
-  std::size_t at_limit_leaves = 0;    ///< leaves above the threshold stopped by a limit
+  std::size_t at_limit_leaves = 0;    ///< leaves above the threshold stopped by a limit or cap
   int max_level = 0;                  ///< deepest level reached
   double time_blocks_s = 0, time_refine_s = 0;
   std::vector<std::string> warnings;

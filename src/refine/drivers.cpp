@@ -103,16 +103,17 @@ class Refiner {
     count_at_limit(key, threshold);
   }
 
-  /// Worst first until the budget: ROAM's split queue (stale entries skipped).
-  template <class Key>
-  void budget(Key&& key, std::size_t max_triangles) {
+  /// Worst first until the budget: ROAM's split queue (stale entries skipped). Only leaves that
+  /// `wanted` accepts enter the queue (all of them for the plain budget).
+  template <class Key, class Wanted>
+  void budget(Key&& key, std::size_t max_triangles, Wanted&& wanted) {
     using Entry = std::pair<float, std::uint32_t>;  // (key, -id order via comparator)
     auto cmp = [](const Entry& a, const Entry& b) {
       return a.first != b.first ? a.first < b.first : a.second > b.second;
     };
     std::priority_queue<Entry, std::vector<Entry>, decltype(cmp)> heap(cmp);
     for (std::uint32_t t = 0; t < forest_.num_base_triangles(); ++t)
-      if (refinable(t)) heap.push({key(err_[t]), t});
+      if (refinable(t) && wanted(err_[t])) heap.push({key(err_[t]), t});
     while (!heap.empty()) {
       const std::uint32_t t = heap.top().second;
       heap.pop();
@@ -121,10 +122,16 @@ class Refiner {
       const std::uint32_t first = num_splits();
       split_block(t, false);
       for (const std::uint32_t c : finish_batch(first))
-        if (forest_.is_leaf(c) && refinable(c)) heap.push({key(err_[c]), c});
+        if (forest_.is_leaf(c) && refinable(c) && wanted(err_[c])) heap.push({key(err_[c]), c});
       if ((num_splits() & 1023) == 0)
         report_progress(static_cast<double>(forest_.num_leaves()) / max_triangles);
     }
+  }
+
+  /// Leaves whose key still exceeds threshold (stopped by a limit or the cap): stats.
+  template <class Key>
+  void count_leaves_above(Key&& key, double threshold) {
+    count_at_limit(key, threshold);
   }
 
   Hierarchy result() {
@@ -323,6 +330,11 @@ RefineResult refine_impl(const SurfelComplex& sc, const BaseMesh& bm, const Scal
   auto variance_key = [](const TriError& e) {
     return std::max(e.sqrt_var, 0.25f * e.max_abs);
   };
+  // Integrated variance: the squared key times the area, so big triangles go first and a crease,
+  // whose error shrinks only linearly with the triangles, does not take the budget.
+  auto integrated_variance = [&](const TriError& e) {
+    return variance_key(e) * variance_key(e) * e.area;
+  };
   switch (opt.mode) {
     case RefineMode::uniform:
       r.uniform(opt.levels);
@@ -331,13 +343,19 @@ RefineResult refine_impl(const SurfelComplex& sc, const BaseMesh& bm, const Scal
       r.adaptive(variance_key, delta);
       break;
     case RefineMode::max_error:
-      r.adaptive([](const TriError& e) { return e.max_estimate(); }, opt.max_error);
+      // With a triangle cap: the leaves above E, worst (integrated variance, as for the budget)
+      // first, so that the cap stops the least useful splits; without one, level-synchronous
+      // batches (placed in parallel).
+      if (opt.max_triangles > 0) {
+        r.budget(integrated_variance, opt.max_triangles,
+                 [&](const TriError& e) { return e.max_estimate() > opt.max_error; });
+        r.count_leaves_above([](const TriError& e) { return e.max_estimate(); }, opt.max_error);
+      } else {
+        r.adaptive([](const TriError& e) { return e.max_estimate(); }, opt.max_error);
+      }
       break;
     case RefineMode::budget:
-      // Integrated variance: the squared key times the area, so big triangles go first and a
-      // crease, whose error shrinks only linearly with the triangles, does not take the budget.
-      r.budget([&](const TriError& e) { return variance_key(e) * variance_key(e) * e.area; },
-               opt.max_triangles);
+      r.budget(integrated_variance, opt.max_triangles, [](const TriError&) { return true; });
       break;
   }
   res.hierarchy = r.result();
