@@ -15,7 +15,7 @@ echo
 echo "== marching cubes (reference) at iso $iso"
 "$bin" mc "$input" --iso "$iso" -o "$out/head_mc.ply"
 echo
-echo "== adamesh extract: base mesh M0, hierarchy, adaptive mesh (default error bound)"
+echo "== adamesh extract: base mesh M0, hierarchy, adaptive mesh (default: 0.25 voxel, at most marching cubes' triangle count)"
 "$bin" extract "$input" --iso "$iso" -o "$out/head.ply" --base "$out/head_base.ply" \
   --hierarchy "$out/head.amh" --report "$out/head_report.json"
 echo
@@ -50,7 +50,8 @@ python3 scripts/demo_table.py "${table[@]}"
 echo
 echo "distances in world units (mm); rms/diag relative to the bounding-box diagonal; eps_e/eps_n:"
 echo "edge and normal deviation (docs/METRICS.md); level k: uniform level of the hierarchy where"
-echo "the adaptive refinement reached it; budget N: the N-triangle cut, worst triangles split first."
+echo "the adaptive refinement reached it; budget N: the longest prefix of head.amh with at most N"
+echo "triangles (largest errors split first)."
 echo
 echo "wrote:"
 printf '  %s\n' "${written[@]}" "$out"/stats_*.json
