@@ -143,6 +143,11 @@ int cmd_extract(const Argv& argv) {
   }
   opt.progress = [&](const char*, double f) { progress.fraction(f); };
 
+  // Memory (docs/SIMPLIFICATION.md): the covering reads no node keys or positions. Release them
+  // (20 B per node) while it runs and recompute them from the volume afterwards.
+  if (opt.r_max <= 0) opt.surface_area = active_surface_area(sc, g, opt);
+  release_node_geometry(sc);
+
   progress.stage("disk cover");
   SimplifyStats stats;
   Covering cov = build_covering(sc, g, opt, stats);
@@ -154,8 +159,9 @@ int cmd_extract(const Argv& argv) {
   rss["covering"] = peak_rss_mb();
 
   progress.stage("dual");
-  BaseMesh base = build_base_mesh(sc, g, cov, in.field.get(), opt, std::move(stats));
-  cov = Covering{};  // refinement needs the complex, the graph and the base mesh only
+  restore_node_geometry(*in.volume, sc, so);
+  // Refinement needs the complex, the graph and the base mesh only: the dual takes the covering.
+  BaseMesh base = build_base_mesh(sc, g, std::move(cov), in.field.get(), opt, std::move(stats));
   progress.finish();
   timings["dual"] = clock.lap();
   rss["dual"] = peak_rss_mb();

@@ -35,6 +35,9 @@ struct SimplifyOptions {
   /// Move base vertices onto the iso-surface with safeguarded Newton steps (needs a field).
   bool project_vertices = true;
   int max_rounds = 64;                  ///< violated-cell repair rounds before falling back
+  /// Surface area of the kept components (sets the default r_max), when the caller computed it
+  /// with active_surface_area(); < 0: build_covering computes it from the node positions.
+  double surface_area = -1;
   /// Optional progress report: stage name ("disk cover", "voronoi", "dual") and fraction done.
   std::function<void(const char* stage, double fraction)> progress;
 };
@@ -96,14 +99,20 @@ struct BaseMesh {
   SimplifyStats stats;
 };
 
-/// Disk covering + Voronoi covering with local repair of violated cells.
+/// Area of the surfels of the components the covering keeps (options.min_component_surfels),
+/// summed in surfel order: what build_covering uses for the default r_max. Reads node positions.
+double active_surface_area(const SurfelComplex& complex, const ConnectivityGraph& graph,
+                           const SimplifyOptions& options);
+
+/// Disk covering + Voronoi covering with local repair of violated cells. Reads no node keys or
+/// positions when options.surface_area is given (the complex's node geometry may be released).
 Covering build_covering(const SurfelComplex& complex, const ConnectivityGraph& graph,
                         const SimplifyOptions& options, SimplifyStats& stats);
 
 /// Dual triangulation of the covering (fallback components meshed from their surfels).
 /// `field` (optional) is used to project vertices onto the iso-surface.
 BaseMesh build_base_mesh(const SurfelComplex& complex, const ConnectivityGraph& graph,
-                         const Covering& covering, const ScalarField* field,
+                         Covering covering, const ScalarField* field,
                          const SimplifyOptions& options, SimplifyStats stats);
 
 /// Debug validator: coverage, independence, grading ≤ 2, disks are topological disks, no violated

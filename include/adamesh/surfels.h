@@ -51,7 +51,8 @@ struct SurfelComplex {
   std::vector<std::uint64_t> surfel_voxel;
   std::vector<float> cvertex;                 ///< 3 per surfel: average of its node positions
 
-  std::size_t num_nodes() const noexcept { return node_key.size(); }
+  /// (From the fans, which stay when release_node_geometry() drops the keys and positions.)
+  std::size_t num_nodes() const noexcept { return node_fan.size(); }
   std::size_t num_surfels() const noexcept {
     return surfel_offset.empty() ? 0 : surfel_offset.size() - 1;
   }
@@ -93,6 +94,16 @@ struct SurfelComplex {
 ///        Error(unsupported) when ids would overflow 32 bits.
 SurfelComplex build_surfels(const Volume& volume, double iso, double inside_sign = 1,
                             const SurfelOptions& options = {});
+
+/// Memory: releases node_key and node_pos (20 bytes per node). Nothing in the covering
+/// (build_covering) reads them; restore_node_geometry() recomputes them before anything else does.
+void release_node_geometry(SurfelComplex& complex);
+
+/// Recomputes node_key and node_pos, bit-identical to build_surfels, from the volume the complex
+/// was built from (same grid, iso-value and sign). No-op when they are present.
+/// \throw Error(internal) when the volume's nodes do not match the complex.
+void restore_node_geometry(const Volume& volume, SurfelComplex& complex,
+                           const SurfelOptions& options = {});
 
 /// Reference marching cubes: triangulates every surfel polygon over the shared node vertices
 /// (vertex i = node i), maximising each polygon's minimum angle. Watertight where the surface is

@@ -9,7 +9,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <cstring>
 #include <limits>
+#include <new>
 #include <utility>
 #include <vector>
 
@@ -19,17 +22,52 @@ namespace adamesh::detail {
 
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 
+/// Array of n trivially copyable T, zero-filled by calloc. Large blocks come from fresh mappings,
+/// so a page becomes resident only when first written: a local search in a large graph costs
+/// resident memory for the pages it touches, not for the whole array.
+template <class T>
+class ZeroedArray {
+ public:
+  ZeroedArray() = default;
+  explicit ZeroedArray(std::size_t n) : n_(n) {
+    if (n == 0) return;
+    p_ = static_cast<T*>(std::calloc(n, sizeof(T)));
+    if (!p_) throw std::bad_alloc();
+  }
+  ZeroedArray(const ZeroedArray& o) : ZeroedArray(o.n_) {
+    if (n_) std::memcpy(p_, o.p_, n_ * sizeof(T));
+  }
+  ZeroedArray(ZeroedArray&& o) noexcept : p_(std::exchange(o.p_, nullptr)), n_(std::exchange(o.n_, 0)) {}
+  ZeroedArray& operator=(ZeroedArray o) noexcept {
+    std::swap(p_, o.p_);
+    std::swap(n_, o.n_);
+    return *this;
+  }
+  ~ZeroedArray() { std::free(p_); }
+  T& operator[](std::size_t i) noexcept { return p_[i]; }
+  const T& operator[](std::size_t i) const noexcept { return p_[i]; }
+  std::size_t size() const noexcept { return n_; }
+  bool empty() const noexcept { return n_ == 0; }
+  void clear_all() noexcept {
+    if (n_) std::memset(static_cast<void*>(p_), 0, n_ * sizeof(T));
+  }
+
+ private:
+  T* p_ = nullptr;
+  std::size_t n_ = 0;
+};
+
 class PathWorkspace {
  public:
   /// Workspace for graphs of n vertices: 12 bytes per vertex, 16 with predecessors (needed by
-  /// astar's path, and pred()).
+  /// astar's path, and pred()). Resident only where searches have been (ZeroedArray).
   explicit PathWorkspace(std::size_t n, bool predecessors = true)
-      : dist_(n), pred_(predecessors ? n : 0), stamp_(n, 0) {}
+      : dist_(n), pred_(predecessors ? n : 0), stamp_(n) {}
 
   /// Starts a new search: every vertex becomes unseen in O(1).
   void begin() {
     if (++gen_ > kMaxGen) {  // wrapped: clear once every 2^31 searches
-      std::fill(stamp_.begin(), stamp_.end(), 0);
+      stamp_.clear_all();
       gen_ = 1;
     }
     heap_.clear();
@@ -76,10 +114,10 @@ class PathWorkspace {
   };
   static constexpr std::uint32_t kMaxGen = 0x7fffffffu;
   bool seen(std::uint32_t v) const { return stamp_[v] >> 1 == gen_; }
-  std::vector<double> dist_;
-  std::vector<std::uint32_t> pred_;
+  ZeroedArray<double> dist_;  ///< valid where seen
+  ZeroedArray<std::uint32_t> pred_;
   /// 2·generation while seen in the current search, 2·generation + 1 once settled.
-  std::vector<std::uint32_t> stamp_;
+  ZeroedArray<std::uint32_t> stamp_;
   std::vector<std::pair<double, std::uint32_t>> heap_;
   std::uint32_t gen_ = 0;
 };

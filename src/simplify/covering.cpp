@@ -32,7 +32,26 @@ double surfel_area(const SurfelComplex& sc, std::size_t s) {
   return a;
 }
 
+/// Components dropped by min_component_surfels.
+std::vector<std::uint8_t> dropped_components(const ConnectivityGraph& g, const SimplifyOptions& opt) {
+  std::vector<std::size_t> comp_size(g.num_components, 0);
+  for (std::size_t v = 0; v < g.num_vertices(); ++v) ++comp_size[g.component[v]];
+  std::vector<std::uint8_t> dropped(g.num_components, 0);
+  for (std::uint32_t c = 0; c < g.num_components; ++c)
+    dropped[c] = opt.min_component_surfels > 0 && comp_size[c] < opt.min_component_surfels;
+  return dropped;
+}
+
 }  // namespace
+
+double active_surface_area(const SurfelComplex& sc, const ConnectivityGraph& g,
+                           const SimplifyOptions& opt) {
+  const auto dropped = dropped_components(g, opt);
+  double area = 0;
+  for (std::size_t v = 0; v < g.num_vertices(); ++v)
+    if (!dropped[g.component[v]]) area += surfel_area(sc, v);
+  return area;
+}
 
 Covering build_covering(const SurfelComplex& sc, const ConnectivityGraph& g,
                         const SimplifyOptions& opt, SimplifyStats& stats) {
@@ -44,21 +63,15 @@ Covering build_covering(const SurfelComplex& sc, const ConnectivityGraph& g,
 
   // Components: sizes, dropped ones.
   Covering cov;
-  std::vector<std::size_t> comp_size(g.num_components, 0);
-  for (std::size_t v = 0; v < n; ++v) ++comp_size[g.component[v]];
-  cov.dropped.assign(g.num_components, 0);
+  cov.dropped = dropped_components(g, opt);
   cov.fallback.assign(g.num_components, 0);
+  for (auto d : cov.dropped) stats.dropped_components += d;
   std::vector<std::uint8_t> active(n, 1);
-  for (std::uint32_t c = 0; c < g.num_components; ++c)
-    if (opt.min_component_surfels > 0 && comp_size[c] < opt.min_component_surfels) {
-      cov.dropped[c] = 1;
-      ++stats.dropped_components;
-    }
-  double area = 0;
-  for (std::size_t v = 0; v < n; ++v) {
+  for (std::size_t v = 0; v < n; ++v)
     if (cov.dropped[g.component[v]]) active[v] = 0;
-    else area += surfel_area(sc, v);
-  }
+  const double area = opt.surface_area >= 0 ? opt.surface_area
+                      : opt.r_max > 0      ? 0.0
+                                           : active_surface_area(sc, g, opt);
   stats.components = g.num_components - stats.dropped_components;
 
   const double r_min = opt.r_min > 0 ? opt.r_min * unit : 2.0 * h;

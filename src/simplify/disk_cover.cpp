@@ -34,7 +34,7 @@ DiskCover::DiskCover(const SurfelComplex& sc, const ConnectivityGraph& g,
   label_.assign(n, 0);
   dnear_.assign(n, kInfF);
   head_.assign(n, kNil);
-  slot_.assign(n, kNil);
+  slot_ = ZeroedArray<std::uint32_t>(n);
   for (auto& f : flags_) f = f ? kActive : 0;
 }
 
@@ -61,11 +61,11 @@ std::uint32_t DiskCover::sift_up(std::uint32_t i) {
     const std::uint32_t parent = (i - 1) / 2;
     if (!before(v, heap_[parent])) break;
     heap_[i] = heap_[parent];
-    slot_[heap_[i]] = i;
+    slot_[heap_[i]] = i + 1;
     i = parent;
   }
   heap_[i] = v;
-  slot_[v] = i;
+  slot_[v] = i + 1;
   return i;
 }
 
@@ -78,25 +78,25 @@ void DiskCover::sift_down(std::uint32_t i) {
     if (child + 1 < size && before(heap_[child + 1], heap_[child])) ++child;
     if (!before(heap_[child], v)) break;
     heap_[i] = heap_[child];
-    slot_[heap_[i]] = i;
+    slot_[heap_[i]] = i + 1;
     i = child;
   }
   heap_[i] = v;
-  slot_[v] = i;
+  slot_[v] = i + 1;
 }
 
 void DiskCover::push(std::uint32_t v) {
-  if (slot_[v] == kNil) {
+  if (slot_[v] == 0) {
     heap_.push_back(v);
     sift_up(static_cast<std::uint32_t>(heap_.size() - 1));
   } else {
-    sift_down(sift_up(slot_[v]));
+    sift_down(sift_up(slot_[v] - 1));
   }
 }
 
 std::uint32_t DiskCover::pop() {
   const std::uint32_t v = heap_.front();
-  slot_[v] = kNil;
+  slot_[v] = 0;
   const std::uint32_t last = heap_.back();
   heap_.pop_back();
   if (!heap_.empty() && last != v) {
@@ -390,6 +390,12 @@ void DiskCover::run() {
     if (on_progress && centre_.size() % 256 == 0 && active_count_ > 0)
       on_progress(double(covered_count_) / double(active_count_));
   }
+  // Memory: the seed filled the heap with every vertex and the growths touched the whole
+  // workspace; repairs push few candidates and search locally. Fresh (untouched) arrays keep
+  // what they touch resident only.
+  std::vector<std::uint32_t>().swap(heap_);
+  slot_ = ZeroedArray<std::uint32_t>(g_.num_vertices());
+  ws_ = PathWorkspace(g_.num_vertices(), /*predecessors=*/false);
 }
 
 std::vector<std::uint32_t> DiskCover::take_new_disks() {

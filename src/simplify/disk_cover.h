@@ -144,7 +144,7 @@ class DiskCover {
   // Candidate heap: uncovered vertices (covered ones are skipped when popped), each at most once,
   // ordered by before() on their current label and dnear.
   std::vector<std::uint32_t> heap_;
-  std::vector<std::uint32_t> slot_;  ///< per vertex: its index in heap_, or kNil
+  ZeroedArray<std::uint32_t> slot_;  ///< per vertex: 1 + its index in heap_, or 0
   PathWorkspace ws_;
   std::vector<std::pair<double, double>> caps_;
   std::vector<std::uint8_t> valid_;

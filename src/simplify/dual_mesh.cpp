@@ -204,12 +204,11 @@ void split_cells(Covering& cov, const std::vector<std::uint8_t>& split, Simplify
 }
 
 BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
-                         const Covering& cov_in, const ScalarField* field,
+                         Covering cov, const ScalarField* field,
                          const SimplifyOptions& opt, SimplifyStats stats) {
   using namespace detail;
   const auto t0 = std::chrono::steady_clock::now();
   const double h = sc.grid.min_spacing();
-  Covering cov = cov_in;
   const auto reference = complex_topology(sc, g);
   const Mat3 a = sc.grid.index_to_world_matrix();
 
@@ -224,9 +223,17 @@ BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
   };
   for (int attempt = 0; attempt < 8; ++attempt) {
     bm = BaseMesh{};
-    std::vector<std::uint32_t> cells = cov.cell;
-    for (std::size_t v = 0; v < cells.size(); ++v)
-      if (cells[v] != Covering::kNoCell && cov.fallback[g.component[v]]) cells[v] = Covering::kNoCell;
+    // Cells without the fallback components' surfels (a copy only when there are such).
+    bool any_fallback = false;
+    for (auto f : cov.fallback) any_fallback |= f != 0;
+    std::vector<std::uint32_t> masked;
+    if (any_fallback) {
+      masked = cov.cell;
+      for (std::size_t v = 0; v < masked.size(); ++v)
+        if (masked[v] != Covering::kNoCell && cov.fallback[g.component[v]])
+          masked[v] = Covering::kNoCell;
+    }
+    const std::vector<std::uint32_t>& cells = any_fallback ? masked : cov.cell;
     HybridResult hr = hybrid_triangles(sc, cells, cov.centre, cov.cone);
     if (!hr.problem_cells.empty()) {  // escalate: split cells into surfels, then fall back
       std::vector<std::uint8_t> split(cov.centre.size(), 0);

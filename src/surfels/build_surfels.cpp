@@ -75,6 +75,22 @@ class Extractor {
 
   std::int64_t nz() const { return nz_; }
 
+  /// Nodes of the node planes [z0, z1) only: counted into counts[k] (write = false), or written
+  /// with ids from node_base (write = true), exactly as the fill pass writes them.
+  void nodes_only(std::int64_t z0, std::int64_t z1, bool write, std::vector<std::int64_t>& counts,
+                  const std::vector<std::int64_t>& node_base, SurfelComplex& out) const {
+    std::unique_ptr<std::uint8_t[]> s0(new std::uint8_t[plane_]), s1(new std::uint8_t[plane_]);
+    std::unique_ptr<PlaneIds> ids(write ? new PlaneIds(plane_) : nullptr);
+    classify(z0, s0.get());
+    for (std::int64_t k = z0; k < z1; ++k) {
+      const bool top = k + 1 < nz_;
+      if (top) classify(k + 1, s1.get());
+      if (write) plane_nodes(k, s0.get(), top ? s1.get() : nullptr, node_base[k], true, *ids, out);
+      else counts[k] = count_plane_nodes(s0.get(), top ? s1.get() : nullptr);
+      std::swap(s0, s1);
+    }
+  }
+
   /// Pass 1 over node planes [z0, z1).
   void count(std::int64_t z0, std::int64_t z1, Counts& out) const {
     std::unique_ptr<std::uint8_t[]> s0(new std::uint8_t[plane_]), s1(new std::uint8_t[plane_]);
@@ -445,7 +461,55 @@ void extract(const Volume& volume, SurfelComplex& out, int threads) {
   });
 }
 
+template <class T>
+void restore_nodes(const Volume& volume, SurfelComplex& out, int threads) {
+  const Extractor<T> ex(volume, out.iso, out.inside_sign);
+  const std::int64_t nz = ex.nz();
+  const std::int64_t nslabs =
+      std::clamp<std::int64_t>(4 * threads, 1, std::max<std::int64_t>(nz / 4, 1));
+  auto slab = [&](std::int64_t s) { return std::pair{nz * s / nslabs, nz * (s + 1) / nslabs}; };
+  std::vector<std::int64_t> counts(nz, 0), node_base(nz + 1, 0);
+  tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, nslabs, 1), [&](const auto& r) {
+    for (std::int64_t s = r.begin(); s < r.end(); ++s) {
+      const auto [z0, z1] = slab(s);
+      ex.nodes_only(z0, z1, false, counts, node_base, out);
+    }
+  });
+  for (std::int64_t k = 0; k < nz; ++k) node_base[k + 1] = node_base[k] + counts[k];
+  const auto num_nodes = static_cast<std::size_t>(node_base[nz]);
+  if (num_nodes != out.num_nodes())
+    fail(Status::internal, "restore_node_geometry: the volume does not match the complex");
+  tbb::parallel_invoke([&] { detail::sized(out.node_key, num_nodes); },
+                       [&] { detail::sized(out.node_pos, 3 * num_nodes); });
+  tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, nslabs, 1), [&](const auto& r) {
+    for (std::int64_t s = r.begin(); s < r.end(); ++s) {
+      const auto [z0, z1] = slab(s);
+      ex.nodes_only(z0, z1, true, counts, node_base, out);
+    }
+  });
+}
+
 }  // namespace
+
+void release_node_geometry(SurfelComplex& complex) {
+  std::vector<std::uint64_t>().swap(complex.node_key);
+  std::vector<float>().swap(complex.node_pos);
+}
+
+void restore_node_geometry(const Volume& volume, SurfelComplex& complex,
+                           const SurfelOptions& options) {
+  if (complex.num_nodes() == 0 || (!complex.node_key.empty() && !complex.node_pos.empty())) return;
+  if (volume.grid.dims != complex.grid.dims)
+    fail(Status::invalid_input, "restore_node_geometry: the volume does not match the complex");
+  const int threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
+  tbb::task_arena arena(threads);
+  arena.execute([&] {
+    dispatch_scalar(volume.type, [&](auto zero) {
+      using T = decltype(zero);
+      restore_nodes<T>(volume, complex, threads);
+    });
+  });
+}
 
 SurfelComplex build_surfels(const Volume& volume, double iso, double inside_sign,
                             const SurfelOptions& options) {
