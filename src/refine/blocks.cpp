@@ -272,6 +272,21 @@ class Improver {
 using MatchGraph = boost::adjacency_list<boost::vecS, boost::vecS, boost::undirectedS>;
 using MatchVertex = boost::graph_traits<MatchGraph>::vertex_descriptor;
 
+/// Edmonds' augmenting paths (Boost) on g from the matching `mate` until none is left; `mate`
+/// receives the result. Returns the number of augmentations.
+std::size_t augment(const MatchGraph& g, std::vector<MatchVertex>& mate) {
+  using IndexMap = boost::property_map<MatchGraph, boost::vertex_index_t>::type;
+  using MateMap = boost::iterator_property_map<std::vector<MatchVertex>::iterator, IndexMap>;
+  const IndexMap index = boost::get(boost::vertex_index, g);
+  MateMap mate_map(mate.begin(), index);
+  boost::edmonds_augmenting_path_finder<MatchGraph, MateMap, IndexMap> augmentor(g, mate_map,
+                                                                                 index);
+  std::size_t found = 0;
+  while (augmentor.augment_matching()) ++found;
+  augmentor.get_current_matching(mate_map);
+  return found;
+}
+
 /// The doubled dual graph without storing it: vertex t < F is base triangle t, t + F its mirror.
 /// Edge weights: block_weights from the smaller triangle's side; t–t' carries t's best border
 /// weight. good_only keeps the edges of good blocks (weight ≥ kGoodBonus).
@@ -339,16 +354,8 @@ std::size_t augment_locally(const DoubledDual& d, bool good_only, int radius,
       lmate.resize(ball.size());
       for (std::size_t i = 0; i < ball.size(); ++i)
         lmate[i] = mate[ball[i]] == null ? null : static_cast<MatchVertex>(local[mate[ball[i]]]);
-      using IndexMap = boost::property_map<MatchGraph, boost::vertex_index_t>::type;
-      using MateMap = boost::iterator_property_map<std::vector<MatchVertex>::iterator, IndexMap>;
-      const IndexMap index = boost::get(boost::vertex_index, g);
-      MateMap mate_map(lmate.begin(), index);
-      boost::edmonds_augmenting_path_finder<MatchGraph, MateMap, IndexMap> augmentor(g, mate_map,
-                                                                                     index);
-      std::size_t found = 0;
-      while (augmentor.augment_matching()) ++found;
+      const std::size_t found = augment(g, lmate);
       if (found > 0) {
-        augmentor.get_current_matching(mate_map);
         for (std::size_t i = 0; i < ball.size(); ++i)
           mate[ball[i]] = lmate[i] == null ? null : ball[lmate[i]];
         augmentations += found;
@@ -430,15 +437,7 @@ Blocks match_blocks(const std::vector<Vec3>& pos,
     return g;
   };
   auto augment_globally = [&](bool good_only) {
-    const MatchGraph g = whole_graph(good_only);
-    using IndexMap = boost::property_map<MatchGraph, boost::vertex_index_t>::type;
-    using MateMap = boost::iterator_property_map<std::vector<MatchVertex>::iterator, IndexMap>;
-    const IndexMap index = boost::get(boost::vertex_index, g);
-    MateMap mate_map(mate.begin(), index);
-    boost::edmonds_augmenting_path_finder<MatchGraph, MateMap, IndexMap> augmentor(g, mate_map,
-                                                                                   index);
-    while (augmentor.augment_matching()) ++out.augmentations;
-    augmentor.get_current_matching(mate_map);
+    out.augmentations += augment(whole_graph(good_only), mate);
   };
   auto unmatched = [&] { return std::count(mate.begin(), mate.end(), null); };
   // Maximum matching of good blocks first, then completed to a perfect matching of all.
