@@ -392,24 +392,28 @@ void check_id_range(std::int64_t n, std::int64_t limit, const char* what) {
                                   std::to_string(n) + "); split the volume");
 }
 
+/// Runs fn(z0, z1) in parallel over z-slabs of [0, nz): a few per thread for balance; each costs
+/// one or two extra plane classifications. The partition depends only on nz and threads.
+template <class Fn>
+void for_each_slab(std::int64_t nz, int threads, Fn&& fn) {
+  const std::int64_t nslabs =
+      std::clamp<std::int64_t>(4 * threads, 1, std::max<std::int64_t>(nz / 4, 1));
+  tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, nslabs, 1), [&](const auto& r) {
+    for (std::int64_t s = r.begin(); s < r.end(); ++s) fn(nz * s / nslabs, nz * (s + 1) / nslabs);
+  });
+}
+
 template <class T>
 void extract(const Volume& volume, SurfelComplex& out, int threads) {
   const Extractor<T> ex(volume, out.iso, out.inside_sign);
   const std::int64_t nz = ex.nz();
-  // Slabs: a few per thread for balance; each costs one or two extra plane classifications.
-  const std::int64_t nslabs =
-      std::clamp<std::int64_t>(4 * threads, 1, std::max<std::int64_t>(nz / 4, 1));
-  auto slab = [&](std::int64_t s) { return std::pair{nz * s / nslabs, nz * (s + 1) / nslabs}; };
 
   Counts counts;
   counts.plane_nodes.assign(nz, 0);
   counts.layer_surfels.assign(nz, 0);
   counts.layer_entries.assign(nz, 0);
-  tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, nslabs, 1), [&](const auto& r) {
-    for (std::int64_t s = r.begin(); s < r.end(); ++s) {
-      const auto [z0, z1] = slab(s);
-      ex.count(z0, z1, counts);
-    }
+  for_each_slab(nz, threads, [&](std::int64_t z0, std::int64_t z1) {
+    ex.count(z0, z1, counts);
   });
 
   std::vector<std::int64_t> node_base(nz + 1), surfel_base(nz + 1), entry_base(nz + 1);
@@ -438,11 +442,8 @@ void extract(const Volume& volume, SurfelComplex& out, int threads) {
                        [&] { detail::sized(out.cvertex, 3 * num_surfels); });
   out.surfel_offset[num_surfels] = static_cast<std::uint32_t>(num_entries);
 
-  tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, nslabs, 1), [&](const auto& r) {
-    for (std::int64_t s = r.begin(); s < r.end(); ++s) {
-      const auto [z0, z1] = slab(s);
-      ex.fill(z0, z1, node_base, surfel_base, entry_base, out);
-    }
+  for_each_slab(nz, threads, [&](std::int64_t z0, std::int64_t z1) {
+    ex.fill(z0, z1, node_base, surfel_base, entry_base, out);
   });
 
   // Link pass: opposite surfels through the fans, c-vertices from the node positions.
@@ -465,15 +466,9 @@ template <class T>
 void restore_nodes(const Volume& volume, SurfelComplex& out, int threads) {
   const Extractor<T> ex(volume, out.iso, out.inside_sign);
   const std::int64_t nz = ex.nz();
-  const std::int64_t nslabs =
-      std::clamp<std::int64_t>(4 * threads, 1, std::max<std::int64_t>(nz / 4, 1));
-  auto slab = [&](std::int64_t s) { return std::pair{nz * s / nslabs, nz * (s + 1) / nslabs}; };
   std::vector<std::int64_t> counts(nz, 0), node_base(nz + 1, 0);
-  tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, nslabs, 1), [&](const auto& r) {
-    for (std::int64_t s = r.begin(); s < r.end(); ++s) {
-      const auto [z0, z1] = slab(s);
-      ex.nodes_only(z0, z1, false, counts, node_base, out);
-    }
+  for_each_slab(nz, threads, [&](std::int64_t z0, std::int64_t z1) {
+    ex.nodes_only(z0, z1, false, counts, node_base, out);
   });
   for (std::int64_t k = 0; k < nz; ++k) node_base[k + 1] = node_base[k] + counts[k];
   const auto num_nodes = static_cast<std::size_t>(node_base[nz]);
@@ -481,11 +476,8 @@ void restore_nodes(const Volume& volume, SurfelComplex& out, int threads) {
     fail(Status::internal, "restore_node_geometry: the volume does not match the complex");
   tbb::parallel_invoke([&] { detail::sized(out.node_key, num_nodes); },
                        [&] { detail::sized(out.node_pos, 3 * num_nodes); });
-  tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, nslabs, 1), [&](const auto& r) {
-    for (std::int64_t s = r.begin(); s < r.end(); ++s) {
-      const auto [z0, z1] = slab(s);
-      ex.nodes_only(z0, z1, true, counts, node_base, out);
-    }
+  for_each_slab(nz, threads, [&](std::int64_t z0, std::int64_t z1) {
+    ex.nodes_only(z0, z1, true, counts, node_base, out);
   });
 }
 
