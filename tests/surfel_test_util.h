@@ -166,9 +166,7 @@ inline int validate_complex(const SurfelComplex& cx) {
   const std::size_t nn = cx.num_nodes(), ns = cx.num_surfels();
   if (cx.node_pos.size() != 3 * nn || cx.node_fan.size() != nn) bad("node array sizes");
   if (cx.surfel_offset.size() != ns + 1 || cx.cvertex.size() != 3 * ns) bad("surfel array sizes");
-  if (cx.surfel_offset.back() != cx.surfel_nodes.size() ||
-      cx.surfel_opposite.size() != cx.surfel_nodes.size())
-    bad("CSR sizes");
+  if (cx.surfel_offset.back() != cx.surfel_nodes.size()) bad("CSR sizes");
   for (std::size_t n = 1; n < nn; ++n)
     if (cx.node_key[n - 1] >= cx.node_key[n]) bad("node keys not increasing");
   for (std::size_t s = 1; s < ns; ++s)

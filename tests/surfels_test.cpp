@@ -99,7 +99,7 @@ TEST(Surfels, SingleCornerTriangleOrientedAwayFromInside) {
   EXPECT_GT(dot(n, Vec3{1, 1, 1}), 0);  // from the positive corner (0,0,0) towards the rest
   for (int k = 0; k < 3; ++k) {
     EXPECT_NEAR(cx.node_position(k)[static_cast<int>(cx.node_key[k] % 3)], 0.5, 1e-7);
-    EXPECT_EQ(cx.surfel_opposite[k], -1);
+    EXPECT_EQ(cx.opposite(0, static_cast<std::size_t>(k)), -1);
   }
   EXPECT_EQ(cx.num_border_segments(), 3u);
   EXPECT_EQ(cx.num_segments(), 3u);
@@ -258,7 +258,6 @@ TEST(Surfels, ThreadCountDoesNotChangeTheResult) {
     EXPECT_EQ(a.node_fan, x->node_fan);
     EXPECT_EQ(a.surfel_offset, x->surfel_offset);
     EXPECT_EQ(a.surfel_nodes, x->surfel_nodes);
-    EXPECT_EQ(a.surfel_opposite, x->surfel_opposite);
     EXPECT_EQ(a.surfel_voxel, x->surfel_voxel);
     EXPECT_EQ(a.cvertex, x->cvertex);
   }

@@ -21,6 +21,18 @@ struct SurfelOptions {
   int threads = 0;  ///< 0 = all hardware threads; results are identical for any value
 };
 
+/// The opposite surfels of one polygon's edges (SurfelComplex::opposites_of), by value: they are
+/// computed from the node fans, not stored. A voxel has 12 edges, so a polygon at most 12 nodes.
+struct PolygonOpposites {
+  static constexpr std::size_t kMax = 12;
+  std::array<std::int32_t, kMax> v{};
+  std::size_t n = 0;
+  std::size_t size() const noexcept { return n; }
+  std::int32_t operator[](std::size_t i) const noexcept { return v[i]; }
+  const std::int32_t* begin() const noexcept { return v.data(); }
+  const std::int32_t* end() const noexcept { return v.data() + n; }
+};
+
 /// Sign rule: a sample is *positive* (inside) when inside_sign·(f − iso) ≥ 0, so samples equal to
 /// the iso-value are positive. Node parameters along an edge are clamped to [kNodeEps, 1 − kNodeEps].
 struct SurfelComplex {
@@ -43,9 +55,6 @@ struct SurfelComplex {
   std::vector<std::uint32_t> surfel_offset;   ///< size num_surfels()+1
   /// Polygon nodes, oriented counter-clockwise seen from outside; edge k = (n[k], n[k+1 mod len]).
   std::vector<std::uint32_t> surfel_nodes;
-  /// Per polygon edge (same indexing as surfel_nodes): the surfel sharing that face segment in
-  /// the neighbouring voxel, or -1 when the segment lies on the volume border.
-  std::vector<std::int32_t> surfel_opposite;
   /// Linear index of the voxel's lower corner. Nothing after the construction needs it (graph,
   /// simplification, refinement): callers short of memory may release it (8 B per surfel).
   std::vector<std::uint64_t> surfel_voxel;
@@ -59,14 +68,44 @@ struct SurfelComplex {
   std::span<const std::uint32_t> nodes_of(std::size_t s) const noexcept {
     return {surfel_nodes.data() + surfel_offset[s], surfel_offset[s + 1] - surfel_offset[s]};
   }
-  std::span<const std::int32_t> opposites_of(std::size_t s) const noexcept {
-    return {surfel_opposite.data() + surfel_offset[s], surfel_offset[s + 1] - surfel_offset[s]};
+  /// The surfel across polygon edge k = (n[k], n[k+1]) of s — the one sharing that face segment
+  /// in the neighbouring voxel — or -1 when the segment lies on the volume border. Not stored
+  /// (memory: 16 bytes per surfel): of the two fan neighbours of s at n[k], the one that is
+  /// also in the fan of n[k+1] (the diagonal voxel never contains the other grid edge).
+  std::int32_t opposite(std::size_t s, std::size_t k) const noexcept {
+    const std::uint32_t b = surfel_offset[s], len = surfel_offset[s + 1] - b;
+    return opposite_on(s, node_fan[surfel_nodes[b + k]],
+                       node_fan[surfel_nodes[b + (k + 1 == len ? 0 : k + 1)]]);
+  }
+  /// opposite(s, k) for every polygon edge of s, in polygon order.
+  PolygonOpposites opposites_of(std::size_t s) const noexcept {
+    PolygonOpposites out;
+    const std::uint32_t b = surfel_offset[s], len = surfel_offset[s + 1] - b;
+    out.n = len;
+    const std::array<std::int32_t, 4>* first = &node_fan[surfel_nodes[b]];
+    const std::array<std::int32_t, 4>* fa = first;
+    for (std::uint32_t k = 0; k < len; ++k) {
+      const std::array<std::int32_t, 4>* fb = k + 1 == len ? first : &node_fan[surfel_nodes[b + k + 1]];
+      out.v[k] = opposite_on(s, *fa, *fb);
+      fa = fb;
+    }
+    return out;
   }
   Vec3 node_position(std::size_t n) const noexcept {
     return {node_pos[3 * n], node_pos[3 * n + 1], node_pos[3 * n + 2]};
   }
   Vec3 cvertex_position(std::size_t s) const noexcept {
     return {cvertex[3 * s], cvertex[3 * s + 1], cvertex[3 * s + 2]};
+  }
+  /// The surfel of fan_a that is beside s (slot ±1 from s's own) and also in fan_b, or -1.
+  static std::int32_t opposite_on(std::size_t s, const std::array<std::int32_t, 4>& fan_a,
+                                  const std::array<std::int32_t, 4>& fan_b) noexcept {
+    const auto self = static_cast<std::int32_t>(s);
+    int q = 0;
+    while (q < 3 && fan_a[q] != self) ++q;
+    for (const std::int32_t c : {fan_a[(q + 1) & 3], fan_a[(q + 3) & 3]})
+      if (c >= 0 && (c == fan_b[0] || c == fan_b[1] || c == fan_b[2] || c == fan_b[3])) return c;
+    return -1;
   }
   /// Node id for an edge key, or -1 (binary search).
   std::int64_t find_node(std::uint64_t key) const noexcept;

@@ -1,5 +1,6 @@
 // Surfel complex extraction (ALGORITHM.md 2.2): sign classification, nodes on sign-changing
-// edges, face segments (asymptotic decider), cycles = surfels, opposites, fans, c-vertices.
+// edges, face segments (asymptotic decider), cycles = surfels, fans, c-vertices
+// (the surfel across a segment is read off the fans when needed: SurfelComplex::opposite).
 //
 // References: Lorensen & Cline, "Marching Cubes" (SIGGRAPH 1987); Nielson & Hamann, "The
 // asymptotic decider" (Visualization 1991); Peixoto & Velho 2002 (surfels, c-vertices).
@@ -11,9 +12,8 @@
 //              planes resident; a voxel's case is two 4-bit "quad codes" of adjacent planes.
 //   2. prefix: plane/layer offsets, so every id is fixed before anything is written.
 //   3. fill:   each slab writes its planes' nodes (key order = id order) and its layers' surfels
-//              (voxel (z,y,x) order, cycles in configuration order), node_fan slots, and in
-//              surfel_opposite the fan slot of the voxel across each segment's face.
-//   4. link:   per surfel, surfel_opposite = node_fan[node][slot]; c-vertex = mean of its nodes.
+//              (voxel (z,y,x) order, cycles in configuration order) and node_fan slots.
+//   4. link:   per surfel, c-vertex = mean of its nodes.
 // Node ids of a plane are found through per-plane arrays (first id, edge mask) (no hashing).
 // The result depends only on the data: identical bytes for any thread count or slab split.
 #include <tbb/blocked_range.h>
@@ -365,7 +365,6 @@ class Extractor {
           const int e = cfg.edge[idx];
           const std::uint32_t node = maps[edge_plane_[e]]->id(p + edge_offset_[e], edge_axis_[e]);
           out.surfel_nodes[entry] = node;
-          out.surfel_opposite[entry] = cfg.opposite_quadrant[idx];  // resolved in link pass
           out.node_fan[node][edge_slot_[e]] = s;
         }
       }
@@ -437,7 +436,6 @@ void extract(const Volume& volume, SurfelComplex& out, int threads) {
                        },
                        [&] { detail::sized(out.surfel_offset, num_surfels + 1); },
                        [&] { detail::sized(out.surfel_nodes, num_entries); },
-                       [&] { detail::sized(out.surfel_opposite, num_entries); },
                        [&] { detail::sized(out.surfel_voxel, num_surfels); },
                        [&] { detail::sized(out.cvertex, 3 * num_surfels); });
   out.surfel_offset[num_surfels] = static_cast<std::uint32_t>(num_entries);
@@ -446,14 +444,13 @@ void extract(const Volume& volume, SurfelComplex& out, int threads) {
     ex.fill(z0, z1, node_base, surfel_base, entry_base, out);
   });
 
-  // Link pass: opposite surfels through the fans, c-vertices from the node positions.
+  // Link pass: c-vertices from the node positions.
   tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, num_surfels, 4096), [&](const auto& r) {
     for (std::int64_t s = r.begin(); s < r.end(); ++s) {
       const std::uint32_t b = out.surfel_offset[s], e = out.surfel_offset[s + 1];
       double sum[3] = {0, 0, 0};
       for (std::uint32_t x = b; x < e; ++x) {
         const std::uint32_t n = out.surfel_nodes[x];
-        out.surfel_opposite[x] = out.node_fan[n][out.surfel_opposite[x]];
         for (int a = 0; a < 3; ++a) sum[a] += out.node_pos[3 * std::size_t{n} + a];
       }
       for (int a = 0; a < 3; ++a)
@@ -538,7 +535,10 @@ std::int64_t SurfelComplex::find_node(std::uint64_t key) const noexcept {
 }
 
 std::size_t SurfelComplex::num_border_segments() const noexcept {
-  return static_cast<std::size_t>(std::count(surfel_opposite.begin(), surfel_opposite.end(), -1));
+  std::size_t count = 0;
+  for (std::size_t s = 0; s < num_surfels(); ++s)
+    for (const std::int32_t o : opposites_of(s)) count += o < 0;
+  return count;
 }
 
 }  // namespace adamesh
