@@ -135,7 +135,9 @@ TEST(Refine, LocalMatchingGivesValidBlocks) {
     EXPECT_GT(r.stats.local_augmentations, 0u) << shape;
     EXPECT_LE(r.stats.local_augmentations, r.stats.augmentations) << shape;
     EXPECT_EQ(2 * r.stats.blocks - r.stats.border_half_blocks, r.stats.base_triangles) << shape;
-    if (std::string(shape) == "shape:wavy_sheet") EXPECT_GT(r.stats.border_half_blocks, 0u);
+    if (std::string(shape) == "shape:wavy_sheet") {
+      EXPECT_GT(r.stats.border_half_blocks, 0u);
+    }
     check_uniform(f, 3, std::string(shape) + "@48 local matching", o);
   }
 }

@@ -121,15 +121,21 @@ int cmd_extract(const Argv& argv) {
   progress.finish();
   timings["surfels"] = clock.lap();
   rss["surfels"] = peak_rss_mb();
+  malloc_trim(0);  // memory: the worker threads' arenas keep their freed slab buffers otherwise
   if (sc.num_surfels() == 0) fail_input(spec, "no surface at iso-value " + std::to_string(iso));
 
   progress.stage("graph");
-  const ConnectivityGraph g = build_graph(sc);
+  ConnectivityGraph g = build_graph(sc);
+  const nlohmann::json graph_info = {{"cvertices", g.num_vertices()},
+                                     {"edges", g.num_edges()},
+                                     {"components", g.num_components},
+                                     {"compact_columns", g.col.empty()}};
   // Memory (docs/SIMPLIFICATION.md): nothing downstream reads the surfels' voxel indices.
   std::vector<std::uint64_t>().swap(sc.surfel_voxel);
   progress.finish();
   timings["graph"] = clock.lap();
   rss["graph"] = peak_rss_mb();
+  malloc_trim(0);
 
   SimplifyOptions opt;
   opt.threads = nthreads;
@@ -159,6 +165,10 @@ int cmd_extract(const Argv& argv) {
   rss["covering"] = peak_rss_mb();
 
   progress.stage("dual");
+  // Memory (docs/SIMPLIFICATION.md): the dual reads the graph's components and border flags, not
+  // its adjacency, which goes while the node geometry comes back; refinement rebuilds it.
+  g.release_adjacency();
+  malloc_trim(0);  // the covering's freed small blocks
   restore_node_geometry(*in.volume, sc, so);
   // Refinement needs the complex, the graph and the base mesh only: the dual takes the covering.
   BaseMesh base = build_base_mesh(sc, g, std::move(cov), in.field.get(), opt, std::move(stats));
@@ -184,6 +194,9 @@ int cmd_extract(const Argv& argv) {
 
   std::optional<RefineStage> refined;
   if (refining) {
+    Stopwatch rebuild;
+    g = build_graph(sc);  // the same graph again (deterministic), adjacency included
+    timings["graph"] = timings["graph"].get<double>() + rebuild.lap();
     refined = run_refine_stage(args, in, iso, sc, g, base, nthreads, progress,
                                args.has("--report"));
     timings["refine"] = refined->refine_s;
@@ -198,8 +211,7 @@ int cmd_extract(const Argv& argv) {
     nlohmann::json r;
     r["input"] = spec;
     r["iso"] = iso;
-    r["graph"] = {{"cvertices", g.num_vertices()}, {"edges", g.num_edges()},
-                  {"components", g.num_components}};
+    r["graph"] = graph_info;
     r["surfels"] = sc.num_surfels();
     r["base"] = topology_json(topo);
     r["base"]["quality"] = {{"q_mean", quality(base.mesh).q_mean}};

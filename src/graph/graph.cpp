@@ -11,6 +11,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <numeric>
 
 namespace adamesh {
@@ -39,7 +40,35 @@ void link_of(const SurfelComplex& sc, std::uint32_t s, Out& out) {
   }
 }
 
+bool delta_fits(std::size_t v, std::uint32_t u) {
+  const std::int64_t d = std::int64_t{u} - static_cast<std::int64_t>(v);
+  return d >= -32767 && d <= 32767;
+}
+
 }  // namespace
+
+void ConnectivityGraph::set_columns(const std::vector<std::uint32_t>& columns) {
+  bool fits = true;
+  for (std::size_t v = 0; v + 1 < row.size() && fits; ++v)
+    for (std::size_t k = row[v]; k < row[v + 1]; ++k) fits &= delta_fits(v, columns[k]);
+  col.clear();
+  delta.clear();
+  if (!fits) {
+    col = columns;
+    return;
+  }
+  delta.resize(columns.size());
+  for (std::size_t v = 0; v + 1 < row.size(); ++v)
+    for (std::size_t k = row[v]; k < row[v + 1]; ++k)
+      delta[k] = static_cast<std::int16_t>(std::int64_t{columns[k]} - static_cast<std::int64_t>(v));
+}
+
+void ConnectivityGraph::release_adjacency() {
+  std::vector<std::uint32_t>().swap(row);
+  std::vector<std::uint32_t>().swap(col);
+  std::vector<std::int16_t>().swap(delta);
+  std::vector<float>().swap(weight);
+}
 
 ConnectivityGraph build_graph(const SurfelComplex& sc) {
   const std::size_t n = sc.num_surfels();
@@ -55,25 +84,35 @@ ConnectivityGraph build_graph(const SurfelComplex& sc) {
     std::uint32_t operator[](std::size_t i) const { return v[i]; }
   };
 
+  std::atomic<bool> fits{true};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
     Small tmp;
     for (std::size_t s = r.begin(); s != r.end(); ++s) {
       tmp.n = 0;
       link_of(sc, static_cast<std::uint32_t>(s), tmp);
       g.row[s + 1] = static_cast<std::uint32_t>(tmp.size());
+      for (std::size_t i = 0; i < tmp.size(); ++i)
+        if (!delta_fits(s, tmp[i])) fits.store(false, std::memory_order_relaxed);
       for (auto o : sc.opposites_of(s))
         if (o < 0) g.border[s] = 1;
     }
   });
   std::partial_sum(g.row.begin(), g.row.end(), g.row.begin());
-  g.col.resize(g.row[n]);
   g.position = sc.cvertex.data();
+  // Columns: compact 16-bit offsets unless some neighbour is too far in id (then absolute ids),
+  // written directly in their final form.
+  const bool compact = fits.load();
+  if (compact) g.delta.resize(g.row[n]);
+  else g.col.resize(g.row[n]);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
     Small tmp;
     for (std::size_t s = r.begin(); s != r.end(); ++s) {
       tmp.n = 0;
       link_of(sc, static_cast<std::uint32_t>(s), tmp);
-      for (std::size_t i = 0; i < tmp.size(); ++i) g.col[g.row[s] + i] = tmp[i];
+      for (std::size_t i = 0; i < tmp.size(); ++i) {
+        if (compact) g.delta[g.row[s] + i] = static_cast<std::int16_t>(std::int64_t{tmp[i]} - std::int64_t(s));
+        else g.col[g.row[s] + i] = tmp[i];
+      }
     }
   });
 

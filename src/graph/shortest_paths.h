@@ -141,7 +141,7 @@ void dijkstra(const ConnectivityGraph& g, PathWorkspace& ws, std::uint32_t sourc
     if (what == Visit::stop) return;
     if (what == Visit::skip) continue;
     for (std::size_t k = g.row[v]; k < g.row[v + 1]; ++k) {
-      const std::uint32_t u = g.col[k];
+      const std::uint32_t u = g.neighbour(v, k);
       if (ws.settled(u) || !allowed(u)) continue;
       const double nd = d + g.edge_weight(v, k);
       if (nd <= limit) ws.relax(u, nd, v, nd);
@@ -176,7 +176,7 @@ std::vector<std::uint32_t> astar(const ConnectivityGraph& g, const SurfelComplex
       break;
     }
     for (std::size_t k = g.row[v]; k < g.row[v + 1]; ++k) {
-      const std::uint32_t u = g.col[k];
+      const std::uint32_t u = g.neighbour(v, k);
       if (ws.settled(u) || !allowed(u)) continue;
       const double nd = d + g.edge_weight(v, k);
       ws.relax(u, nd, v, nd + h(u));

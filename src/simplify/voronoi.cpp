@@ -124,7 +124,7 @@ void Voronoi::add_cells(const std::vector<std::pair<std::uint32_t, std::uint32_t
     if (!better(e.d, cv, e.v)) continue;
     reassign(e.v, e.c, e.d);
     for (std::size_t k = g_.row[e.v]; k < g_.row[e.v + 1]; ++k)
-      offer(e.d + g_.edge_weight(e.v, k), g_.col[k], e.c);
+      offer(e.d + g_.edge_weight(e.v, k), g_.neighbour(e.v, k), e.c);
   }
   std::fill(stamp_.begin(), stamp_.end(), 0);  // back to generation stamps
   gen_ = 0;
@@ -195,7 +195,8 @@ std::size_t Voronoi::regularize() {
             if (pinched_fan(trial)) continue;
             double dx = kInf;  // distance to x's centre through a neighbour in x
             for (std::size_t k = g_.row[s]; k < g_.row[s + 1]; ++k)
-              if (cell_[g_.col[k]] == x) dx = std::min(dx, dist_[g_.col[k]] + g_.edge_weight(s, k));
+              if (const auto u = g_.neighbour(s, k); cell_[u] == x)
+                dx = std::min(dx, dist_[u] + g_.edge_weight(s, k));
             const double penalty = dx - dist_[s];
             if (penalty < best || (penalty == best && s < best_v)) {
               best = penalty;
