@@ -75,35 +75,40 @@ std::vector<CompTopo> mesh_topology(const Mesh& m, const std::vector<std::uint32
                                              std::size_t num_components) {
   std::vector<CompTopo> t(num_components);
   for (std::size_t v = 0; v < m.num_vertices(); ++v) t[comp[v]].chi += 1;
-  struct HalfEdge {
-    std::uint32_t a, b;
-    bool operator<(const HalfEdge& o) const { return a != o.a ? a < o.a : b < o.b; }
-    bool operator==(const HalfEdge& o) const { return a == o.a && b == o.b; }
-  };
-  std::vector<HalfEdge> he;
-  he.reserve(m.triangles.size());
-  for (std::size_t f = 0; f < m.num_triangles(); ++f) {
-    const auto* tri = &m.triangles[3 * f];
-    t[comp[tri[0]]].chi += 1;
-    for (int i = 0; i < 3; ++i) he.push_back({tri[i], tri[(i + 1) % 3]});
+  // Corners by vertex (CSR): half-edge a → b is corner c of triangle c / 3 at a, b the next
+  // corner's vertex. Memory: 4 bytes per half-edge, where a sorted half-edge list needs 8.
+  std::vector<std::uint32_t> offset(m.num_vertices() + 1, 0);
+  for (auto v : m.triangles) ++offset[v + 1];
+  std::partial_sum(offset.begin(), offset.end(), offset.begin());
+  std::vector<std::uint32_t> corner(m.triangles.size());
+  {
+    std::vector<std::uint32_t> fill(offset.begin(), offset.end() - 1);
+    for (std::size_t i = 0; i < m.triangles.size(); ++i)
+      corner[fill[m.triangles[i]]++] = static_cast<std::uint32_t>(i);
   }
-  std::sort(he.begin(), he.end());
-  for (std::size_t i = 1; i < he.size(); ++i)
-    if (he[i] == he[i - 1]) t[comp[he[i].a]].manifold = false;  // repeated directed edge
+  auto head = [&](std::uint32_t c) { return m.triangles[c - c % 3 + (c % 3 + 1) % 3]; };
+  auto has_half_edge = [&](std::uint32_t a, std::uint32_t b) {
+    for (std::uint32_t i = offset[a]; i < offset[a + 1]; ++i)
+      if (head(corner[i]) == b) return true;
+    return false;
+  };
+  for (std::size_t f = 0; f < m.num_triangles(); ++f) t[comp[m.triangles[3 * f]]].chi += 1;
   // Undirected edges and boundary half-edges.
   std::unordered_map<std::uint32_t, std::uint32_t> boundary_next;
   std::vector<std::uint8_t> vertex_boundary_out(m.num_vertices(), 0);
-  for (const auto& h : he) {
-    const bool twin = std::binary_search(he.begin(), he.end(), HalfEdge{h.b, h.a});
-    if (twin) {
-      if (h.a < h.b) t[comp[h.a]].chi -= 1;
-    } else {
-      t[comp[h.a]].chi -= 1;
-      if (vertex_boundary_out[h.a]++) t[comp[h.a]].manifold = false;
-      boundary_next[h.a] = h.b;
+  for (std::uint32_t a = 0; a < m.num_vertices(); ++a)
+    for (std::uint32_t i = offset[a]; i < offset[a + 1]; ++i) {
+      const std::uint32_t b = head(corner[i]);
+      for (std::uint32_t j = offset[a]; j < i; ++j)
+        if (head(corner[j]) == b) t[comp[a]].manifold = false;  // repeated directed edge
+      if (has_half_edge(b, a)) {
+        if (a < b) t[comp[a]].chi -= 1;
+      } else {
+        t[comp[a]].chi -= 1;
+        if (vertex_boundary_out[a]++) t[comp[a]].manifold = false;
+        boundary_next[a] = b;
+      }
     }
-  }
-  std::vector<HalfEdge>().swap(he);  // memory: not needed for the vertex links
   std::vector<std::uint8_t> seen(m.num_vertices(), 0);
   for (const auto& [start, next] : boundary_next) {
     if (seen[start]) continue;
@@ -120,14 +125,6 @@ std::vector<CompTopo> mesh_topology(const Mesh& m, const std::vector<std::uint32
     ++t[comp[start]].loops;
   }
   // Vertex links: the triangles around each vertex form one fan (one cycle or one path).
-  std::vector<std::uint32_t> offset(m.num_vertices() + 1, 0);
-  for (auto v : m.triangles) ++offset[v + 1];
-  std::partial_sum(offset.begin(), offset.end(), offset.begin());
-  std::vector<std::uint32_t> corner(m.triangles.size());
-  {
-    std::vector<std::uint32_t> fill(offset.begin(), offset.end() - 1);
-    for (std::size_t i = 0; i < m.triangles.size(); ++i) corner[fill[m.triangles[i]]++] = static_cast<std::uint32_t>(i);
-  }
   for (std::uint32_t v = 0; v < m.num_vertices(); ++v) {
     const std::uint32_t deg = offset[v + 1] - offset[v];
     if (deg == 0) continue;

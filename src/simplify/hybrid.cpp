@@ -29,58 +29,54 @@ HybridResult hybrid_triangles(const SurfelComplex& sc, const std::vector<std::ui
   const std::uint32_t ncell = static_cast<std::uint32_t>(centre.size());
   HybridResult out;
 
+  // Memory (docs/SIMPLIFICATION.md): cell boundary half-edges in a CSR by cell (12 bytes each),
+  // counted before they are stored; node sets are bitsets; cell adjacency is read off the
+  // half-edges; only each triangle's owner (its smallest cell) stores it.
   struct HalfEdge {
-    std::uint32_t c, a, b, label;
+    std::uint32_t a, b, label;
   };
-  // Memory (docs/SIMPLIFICATION.md): the half-edges are counted first and stored once (no
-  // regrowth copies); node sets are bitsets; produced triangles are a sorted vector, not a map.
-  std::vector<HalfEdge> he;
-  {
-    std::size_t count = 0;
-    for (std::uint32_t u = 0; u < sc.num_surfels(); ++u) {
-      const std::uint32_t c = cell[u];
-      if (c == kNone) continue;
-      for (const std::int32_t o : sc.opposites_of(u)) count += !(o >= 0 && cell[o] == c);
-    }
-    he.reserve(count);
-  }
+  std::vector<std::uint32_t> first(ncell + 1, 0);  // cell x's half-edges: first[x] .. first[x+1]
   for (std::uint32_t u = 0; u < sc.num_surfels(); ++u) {
     const std::uint32_t c = cell[u];
     if (c == kNone) continue;
-    const auto nodes = sc.nodes_of(u);
-    const auto opp = sc.opposites_of(u);
-    for (std::size_t e = 0; e < nodes.size(); ++e) {
-      const std::int32_t o = opp[e];
-      if (o >= 0 && cell[o] == c) continue;
-      he.push_back({c, nodes[e], nodes[(e + 1) % nodes.size()], o < 0 ? kBorder : cell[o]});
+    for (const std::int32_t o : sc.opposites_of(u)) first[c + 1] += !(o >= 0 && cell[o] == c);
+  }
+  for (std::uint32_t c = 0; c < ncell; ++c) first[c + 1] += first[c];
+  std::vector<HalfEdge> he(first[ncell]);
+  {
+    std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
+    for (std::uint32_t u = 0; u < sc.num_surfels(); ++u) {
+      const std::uint32_t c = cell[u];
+      if (c == kNone) continue;
+      const auto nodes = sc.nodes_of(u);
+      const auto opp = sc.opposites_of(u);
+      for (std::size_t e = 0; e < nodes.size(); ++e) {
+        const std::int32_t o = opp[e];
+        if (o >= 0 && cell[o] == c) continue;
+        he[fill[c]++] = {nodes[e], nodes[(e + 1) % nodes.size()], o < 0 ? kBorder : cell[o]};
+      }
     }
   }
-  std::sort(he.begin(), he.end(), [](const HalfEdge& p, const HalfEdge& q) {
-    return p.c != q.c ? p.c < q.c : p.a < q.a;
-  });
+  for (std::uint32_t c = 0; c < ncell; ++c)
+    std::sort(he.begin() + first[c], he.begin() + first[c + 1],
+              [](const HalfEdge& p, const HalfEdge& q) { return p.a < q.a; });
 
   // Kept nodes: every boundary node of a cone cell.
   std::vector<std::uint32_t> kept_list;
-  for (const auto& h : he)
-    if (cone[h.c]) kept_list.push_back(h.a);
+  for (std::uint32_t c = 0; c < ncell; ++c)
+    if (cone[c])
+      for (std::uint32_t i = first[c]; i < first[c + 1]; ++i) kept_list.push_back(he[i].a);
 
-  // Dual edges (cell pairs across a segment) for the quad decisions.
-  std::vector<std::uint64_t> pairs;
+  // Dual edges (cell pairs across a segment), as seen from the smaller cell.
   auto key = [](std::uint32_t x, std::uint32_t y) {
     if (x > y) std::swap(x, y);
     return (std::uint64_t(x) << 32) | y;
   };
-  {
-    std::size_t count = 0;
-    for (const auto& h : he) count += h.label != kBorder && h.c < h.label;
-    pairs.reserve(count);
-  }
-  for (const auto& h : he)
-    if (h.label != kBorder && h.c < h.label) pairs.push_back(key(h.c, h.label));
-  std::sort(pairs.begin(), pairs.end());
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
   auto adjacent = [&](std::uint32_t x, std::uint32_t y) {
-    return std::binary_search(pairs.begin(), pairs.end(), key(x, y));
+    if (x > y) std::swap(x, y);
+    for (std::uint32_t i = first[x]; i < first[x + 1]; ++i)
+      if (he[i].label == y) return true;
+    return false;
   };
 
   // 4-cell junctions: choose a diagonal (shorter centre distance, not an existing edge); when
@@ -143,21 +139,15 @@ HybridResult hybrid_triangles(const SurfelComplex& sc, const std::vector<std::ui
     return it != diagonal.end() && it->node == n ? &*it : nullptr;
   };
 
-  // Links and triangles, cell by cell.
+  // Links and triangles, cell by cell: cell_triangles(x, emit) walks x's boundary loop and emits
+  // its triangles in canonical rotation (smallest id first); false when the boundary is not one
+  // simple loop (then x is not a disk).
   constexpr std::uint32_t kBreak = kNone;
-  // Every triangle as produced by each of its cells (canonical rotation: smallest id first).
-  std::vector<std::array<std::uint32_t, 3>> produced;
-  produced.reserve(he.size());  // about one per boundary half-edge at most, in practice
-  std::vector<std::uint32_t> link;
-  std::vector<std::uint8_t> problem(ncell, 0);
-  for (std::size_t begin = 0; begin < he.size();) {
-    std::size_t end = begin;
-    while (end < he.size() && he[end].c == he[begin].c) ++end;
-    const std::uint32_t x = he[begin].c;
-    // Walk the loop from the first half-edge.
+  std::vector<std::uint32_t> link, items;
+  auto cell_triangles = [&](std::uint32_t x, auto&& emit) {
+    const std::size_t begin = first[x], end = first[x + 1];
     link.clear();
     std::size_t at = begin, steps = 0;
-    bool ok = true;
     do {
       const HalfEdge& h = he[at];
       const bool ka = is_kept(h.a), kb = is_kept(h.b);
@@ -170,20 +160,14 @@ HybridResult hybrid_triangles(const SurfelComplex& sc, const std::vector<std::ui
       if (!(ka && kb)) link.push_back(h.label == kBorder ? kBreak : h.label);
       auto it = std::lower_bound(he.begin() + begin, he.begin() + end, h.b,
                                  [](const HalfEdge& p, std::uint32_t n) { return p.a < n; });
-      if (it == he.begin() + end || it->a != h.b || (it + 1 != he.begin() + end && (it + 1)->a == h.b)) {
-        ok = false;  // the boundary is not one simple loop: not a disk
-        break;
-      }
+      if (it == he.begin() + end || it->a != h.b || (it + 1 != he.begin() + end && (it + 1)->a == h.b))
+        return false;  // the boundary is not one simple loop: not a disk
       at = static_cast<std::size_t>(it - he.begin());
       ++steps;
     } while (at != begin && steps <= end - begin);
-    if (!ok || steps != end - begin) {
-      problem[x] = 1;
-      begin = end;
-      continue;
-    }
+    if (steps != end - begin) return false;
     // Merge consecutive duplicates (cyclically), then emit triangles between neighbours.
-    std::vector<std::uint32_t> items;
+    items.clear();
     for (auto v : link)
       if (items.empty() || items.back() != v) items.push_back(v);
     while (items.size() > 1 && items.front() == items.back()) items.pop_back();
@@ -197,39 +181,70 @@ HybridResult hybrid_triangles(const SurfelComplex& sc, const std::vector<std::ui
       std::array<std::uint32_t, 3> t{x, p, q};
       const auto r = std::min_element(t.begin(), t.end()) - t.begin();
       std::rotate(t.begin(), t.begin() + r, t.end());
-      produced.push_back(t);
+      emit(t);
     }
-    begin = end;
+    return true;
+  };
+  // Each triangle must be produced once per cell vertex, never reversed. Its owner (the smallest
+  // vertex, always a cell: kept nodes come after the cells) stores it; the other cells' copies
+  // are counted against the owner's (or kept aside when the owner did not produce it).
+  using Tri = std::array<std::uint32_t, 3>;
+  std::vector<Tri> owned;
+  std::vector<std::uint8_t> problem(ncell, 0);
+  for (std::uint32_t x = 0; x < ncell; ++x)
+    if (first[x] < first[x + 1] &&
+        !cell_triangles(x, [&](const Tri& t) { if (t[0] == x) owned.push_back(t); }))
+      problem[x] = 1;
+  std::sort(owned.begin(), owned.end());
+  std::vector<std::uint8_t> copies(owned.size(), 0);  // other cells' copies, on the first entry
+  std::vector<Tri> orphans;
+  for (std::uint32_t x = 0; x < ncell; ++x) {
+    if (first[x] == first[x + 1] || problem[x]) continue;
+    cell_triangles(x, [&](const Tri& t) {
+      if (t[0] == x) return;
+      const auto it = std::lower_bound(owned.begin(), owned.end(), t);
+      if (it != owned.end() && *it == t) {
+        auto& n = copies[static_cast<std::size_t>(it - owned.begin())];
+        if (n < 255) ++n;
+      } else {
+        orphans.push_back(t);
+      }
+    });
   }
   std::vector<std::uint32_t>().swap(link);
+  std::vector<std::uint32_t>().swap(items);
   std::vector<HalfEdge>().swap(he);
-  std::vector<std::uint64_t>().swap(pairs);
   std::vector<Diagonal>().swap(diagonal);
   out.kept_nodes = std::move(kept_list);
-  // Each triangle once per cell vertex; the reversed triangle must not occur.
-  std::sort(produced.begin(), produced.end());
-  std::vector<std::uint8_t> keep;  // per distinct triangle, in order
+  std::sort(orphans.begin(), orphans.end());
+  auto produced = [&](const Tri& t) {
+    return std::binary_search(owned.begin(), owned.end(), t) ||
+           std::binary_search(orphans.begin(), orphans.end(), t);
+  };
+  auto mark = [&](const Tri& t) {
+    for (auto v : t)
+      if (v < ncell) problem[v] = 1;
+  };
+  for (const Tri& t : orphans) mark(t);  // their owner did not produce them
+  std::vector<std::uint8_t> keep;  // per distinct owned triangle, in order
   std::size_t valid = 0;
-  for (std::size_t i = 0; i < produced.size();) {
-    const auto t = produced[i];
+  for (std::size_t i = 0; i < owned.size();) {
+    const Tri t = owned[i];
     std::size_t j = i + 1;
-    while (j < produced.size() && produced[j] == t) ++j;
+    while (j < owned.size() && owned[j] == t) ++j;
     int cells_in = 0;
     for (auto v : t) cells_in += v < ncell;
-    const std::array<std::uint32_t, 3> rev{t[0], t[2], t[1]};
-    const bool reversed = std::binary_search(produced.begin(), produced.end(), rev);
-    const bool ok = static_cast<std::size_t>(cells_in) == j - i && !reversed;
-    if (!ok)
-      for (auto v : t)
-        if (v < ncell) problem[v] = 1;
+    const bool ok = static_cast<std::size_t>(cells_in) == j - i + copies[i] &&
+                    !produced(Tri{t[0], t[2], t[1]});
+    if (!ok) mark(t);
     keep.push_back(ok);
     valid += ok;
     i = j;
   }
   out.triangles.reserve(valid);
-  for (std::size_t i = 0, k = 0; i < produced.size(); ++k) {
-    const auto t = produced[i];
-    while (i < produced.size() && produced[i] == t) ++i;
+  for (std::size_t i = 0, k = 0; i < owned.size(); ++k) {
+    const Tri t = owned[i];
+    while (i < owned.size() && owned[i] == t) ++i;
     if (keep[k]) out.triangles.push_back(t);
   }
   for (std::uint32_t c = 0; c < ncell; ++c)
