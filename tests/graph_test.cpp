@@ -8,6 +8,7 @@
 
 #include "adamesh/graph.h"
 #include "adamesh/surfels.h"
+#include "graph/shortest_paths.h"
 #include "surfel_test_util.h"
 
 using namespace adamesh;
@@ -179,4 +180,45 @@ TEST(Graph, ReleasedAdjacencyKeepsVertexData) {
   EXPECT_EQ(g.component, comp);
   EXPECT_TRUE(g.row.empty() && g.col.empty() && g.delta.empty());
   EXPECT_EQ(g.num_edges(), 0u);
+}
+
+TEST(Graph, SparseWorkspaceSearchesLikeTheDenseOne) {
+  // Dijkstra balls and A* paths with the hash-table workspace: same order, distances and
+  // predecessors as with the per-vertex arrays, over many searches (table reuse and growth).
+  const Volume v = sample_volume({28, 28, 28}, [](double i, double j, double k) {
+    return std::sin(0.45 * i) * std::cos(0.4 * j) + std::sin(0.4 * j) * std::cos(0.45 * k) +
+           std::sin(0.45 * k) * std::cos(0.4 * i);
+  });
+  const SurfelComplex sc = build_surfels(v, 0.1);
+  const ConnectivityGraph g = build_graph(sc);
+  const auto n = static_cast<std::uint32_t>(g.num_vertices());
+  ASSERT_GT(n, 5000u);
+  detail::PathWorkspace dense(n), sparse = detail::PathWorkspace::sparse();
+  std::size_t settled_total = 0;
+  for (std::uint32_t src = 0; src < n; src += 97) {
+    const double limit = 1.0 + (src % 7) * 2.5;  // radii from 1 to 16 voxels: the table grows
+    std::vector<std::pair<std::uint32_t, double>> a, b;
+    detail::dijkstra(g, dense, src, limit, [&](std::uint32_t u, double d) {
+      a.push_back({u, d});
+      return detail::Visit::expand;
+    });
+    detail::dijkstra(g, sparse, src, limit, [&](std::uint32_t u, double d) {
+      b.push_back({u, d});
+      return detail::Visit::expand;
+    });
+    ASSERT_EQ(a, b) << "source " << src;
+    for (const auto& [u, d] : a) {
+      EXPECT_TRUE(sparse.settled(u));
+      EXPECT_EQ(sparse.dist(u), d);
+      EXPECT_EQ(sparse.pred(u), dense.pred(u));
+    }
+    settled_total += a.size();
+    const std::uint32_t target = (src * 7919u) % n;
+    double la = 0, lb = 0;
+    const auto pa = detail::astar(g, sc, dense, src, target, la, [](std::uint32_t) { return true; });
+    const auto pb = detail::astar(g, sc, sparse, src, target, lb, [](std::uint32_t) { return true; });
+    EXPECT_EQ(pa, pb);
+    EXPECT_EQ(la, lb);
+  }
+  EXPECT_GT(settled_total, 10000u);
 }

@@ -205,6 +205,11 @@ int cmd_extract(const Argv& argv) {
     rss["refine"] = peak_rss_mb();
   }
 
+  // Memory: the complex and the graph are done with; the topology report below needs room.
+  const std::size_t num_surfels = sc.num_surfels();
+  sc = SurfelComplex{};
+  g = ConnectivityGraph{};
+  malloc_trim(0);
   const TopologyReport topo = topology(base.mesh);
   const auto& st = base.stats;
   if (auto path = args.get("--report")) {
@@ -212,7 +217,7 @@ int cmd_extract(const Argv& argv) {
     r["input"] = spec;
     r["iso"] = iso;
     r["graph"] = graph_info;
-    r["surfels"] = sc.num_surfels();
+    r["surfels"] = num_surfels;
     r["base"] = topology_json(topo);
     r["base"]["quality"] = {{"q_mean", quality(base.mesh).q_mean}};
     r["fallback_components"] = st.fallback_components;
@@ -249,7 +254,7 @@ int cmd_extract(const Argv& argv) {
         *path, [&](std::ostream& o) { o << std::setw(2) << r << "\n"; }, false);
   }
   if (!quiet) {
-    std::cout << "surfels " << sc.num_surfels() << " -> base mesh " << topo.vertices
+    std::cout << "surfels " << num_surfels << " -> base mesh " << topo.vertices
               << " vertices, " << topo.triangles << " triangles (χ " << topo.euler << ", "
               << topo.components << " components, " << topo.boundary_loops
               << " boundary loops)";

@@ -62,29 +62,69 @@ class PathWorkspace {
   /// Workspace for graphs of n vertices: 12 bytes per vertex, 16 with predecessors (needed by
   /// astar's path, and pred()). Resident only where searches have been (ZeroedArray).
   explicit PathWorkspace(std::size_t n, bool predecessors = true)
-      : dist_(n), pred_(predecessors ? n : 0), stamp_(n) {}
+      : dist_(n), pred_(predecessors ? n : 0), stamp_(n), with_pred_(predecessors) {}
+
+  /// A workspace without per-vertex arrays: the search state lives in a hash table sized to the
+  /// largest search so far (24 bytes per reached vertex, load ≤ 1/2). For many local searches
+  /// spread over a large graph, where the dense arrays would end up resident everywhere. Same
+  /// results as the dense workspace, bit for bit; lookups cost a hash probe.
+  static PathWorkspace sparse(bool predecessors = true) {
+    PathWorkspace ws(0, predecessors);
+    ws.sparse_ = true;
+    ws.table_.resize(kFirstCapacity);
+    ws.mask_ = kFirstCapacity - 1;
+    return ws;
+  }
 
   /// Starts a new search: every vertex becomes unseen in O(1).
   void begin() {
     if (++gen_ > kMaxGen) {  // wrapped: clear once every 2^31 searches
       stamp_.clear_all();
+      for (auto& e : table_) e = Entry{};
       gen_ = 1;
     }
     heap_.clear();
+    used_ = 0;
   }
-  double dist(std::uint32_t v) const { return seen(v) ? dist_[v] : kInf; }
-  bool settled(std::uint32_t v) const { return stamp_[v] == (gen_ << 1 | 1); }
-  std::uint32_t pred(std::uint32_t v) const { return pred_[v]; }
+  double dist(std::uint32_t v) const {
+    if (sparse_) {
+      const Entry* e = find(v);
+      return e ? e->dist : kInf;
+    }
+    return seen(v) ? dist_[v] : kInf;
+  }
+  bool settled(std::uint32_t v) const {
+    if (sparse_) {
+      const Entry* e = find(v);
+      return e && e->stamp == (gen_ << 1 | 1);
+    }
+    return stamp_[v] == (gen_ << 1 | 1);
+  }
+  std::uint32_t pred(std::uint32_t v) const {
+    if (sparse_) {
+      const Entry* e = find(v);
+      return e ? e->pred : 0;
+    }
+    return pred_[v];
+  }
 
   /// Lowers v's tentative distance (and remembers its predecessor); returns true if it improved.
   bool relax(std::uint32_t v, double d, std::uint32_t from, double key) {
-    if (seen(v)) {
-      if (dist_[v] <= d) return false;
+    if (sparse_) {
+      Entry& e = insert(v);
+      if (e.stamp >> 1 == gen_ && e.dist <= d) return false;
+      if (e.stamp >> 1 != gen_) e.stamp = gen_ << 1;
+      e.dist = d;
+      e.pred = from;
     } else {
-      stamp_[v] = gen_ << 1;
+      if (seen(v)) {
+        if (dist_[v] <= d) return false;
+      } else {
+        stamp_[v] = gen_ << 1;
+      }
+      dist_[v] = d;
+      if (with_pred_) pred_[v] = from;
     }
-    dist_[v] = d;
-    if (!pred_.empty()) pred_[v] = from;
     heap_.push_back({key, v});
     std::push_heap(heap_.begin(), heap_.end(), Greater{});
     return true;
@@ -95,8 +135,9 @@ class PathWorkspace {
       std::pop_heap(heap_.begin(), heap_.end(), Greater{});
       const auto e = heap_.back();
       heap_.pop_back();
-      if (stamp_[e.second] != gen_ << 1) continue;  // settled already (or not seen)
-      stamp_[e.second] = gen_ << 1 | 1;
+      std::uint32_t& stamp = sparse_ ? find(e.second)->stamp : stamp_[e.second];
+      if (stamp != gen_ << 1) continue;  // settled already (or not seen)
+      stamp = gen_ << 1 | 1;
       v = e.second;
       return true;
     }
@@ -112,12 +153,55 @@ class PathWorkspace {
       return a > b;
     }
   };
+  /// Sparse mode: open addressing, linear probing. Entries of older searches (stamp of another
+  /// generation) count as free, so begin() clears nothing: within one search nothing is removed,
+  /// hence a vertex's probe chain never crosses a free slot.
+  struct Entry {
+    std::uint32_t v = 0, stamp = 0;
+    double dist = 0;
+    std::uint32_t pred = 0;
+  };
+  static constexpr std::size_t kFirstCapacity = 1024;
+  static std::size_t home(std::uint32_t v) {
+    return static_cast<std::size_t>((std::uint64_t{v} * 0x9E3779B97F4A7C15ull) >> 32);
+  }
+  Entry* find(std::uint32_t v) const {
+    for (std::size_t i = home(v) & mask_;; i = (i + 1) & mask_) {
+      Entry& e = table_[i];
+      if (e.stamp >> 1 != gen_) return nullptr;
+      if (e.v == v) return &e;
+    }
+  }
+  Entry& insert(std::uint32_t v) {
+    if (Entry* e = find(v)) return *e;
+    if (2 * (used_ + 1) > table_.size()) grow();
+    std::size_t i = home(v) & mask_;
+    while (table_[i].stamp >> 1 == gen_) i = (i + 1) & mask_;
+    ++used_;
+    table_[i] = Entry{v, 0, 0, 0};  // the caller stamps it
+    return table_[i];
+  }
+  void grow() {
+    std::vector<Entry> old(2 * table_.size());
+    old.swap(table_);
+    mask_ = table_.size() - 1;
+    for (const Entry& e : old) {
+      if (e.stamp >> 1 != gen_) continue;
+      std::size_t i = home(e.v) & mask_;
+      while (table_[i].stamp >> 1 == gen_) i = (i + 1) & mask_;
+      table_[i] = e;
+    }
+  }
   static constexpr std::uint32_t kMaxGen = 0x7fffffffu;
   bool seen(std::uint32_t v) const { return stamp_[v] >> 1 == gen_; }
   ZeroedArray<double> dist_;  ///< valid where seen
   ZeroedArray<std::uint32_t> pred_;
   /// 2·generation while seen in the current search, 2·generation + 1 once settled.
   ZeroedArray<std::uint32_t> stamp_;
+  bool with_pred_ = true;
+  bool sparse_ = false;
+  mutable std::vector<Entry> table_;
+  std::size_t mask_ = 0, used_ = 0;
   std::vector<std::pair<double, std::uint32_t>> heap_;
   std::uint32_t gen_ = 0;
 };

@@ -489,7 +489,7 @@ Blocks match_blocks(const std::vector<Vec3>& pos,
 std::vector<std::array<std::uint32_t, 3>> quad_blocks(
     const Surface& s, const std::vector<std::array<std::uint32_t, 3>>& tris,
     std::vector<Vec3>& pos, std::vector<std::uint32_t>& anchor, std::vector<std::uint8_t>& border) {
-  PathWorkspace ws(s.sc.num_surfels());
+  PathWorkspace ws = PathWorkspace::sparse();
   // Edge midpoints, in (min, max) order; an edge with one triangle is a border edge when both
   // its ends are border vertices.
   std::map<std::pair<std::uint32_t, std::uint32_t>, int> uses;

@@ -48,7 +48,7 @@ class Refiner {
       : surf_(surf), opt_(opt), stats_(stats), base_(std::move(base)),
         forest_(base_, static_cast<std::uint32_t>(pos.size())), pos_(std::move(pos)),
         anchor_(std::move(anchor)), border_(std::move(border)),
-        ws_([n = surf.sc.num_surfels()] { return PathWorkspace(n); }) {
+        ws_([] { return PathWorkspace::sparse(); }) {
     min_edge_ = opt.min_edge >= 0 ? opt.min_edge : (surf.field.is_analytic() ? 0.25 : 0.5) * surf.h;
     err_.resize(base_.size());
     cap_.resize(base_.size());

@@ -391,11 +391,12 @@ void DiskCover::run() {
       on_progress(double(covered_count_) / double(active_count_));
   }
   // Memory: the seed filled the heap with every vertex and the growths touched the whole
-  // workspace; repairs push few candidates and search locally. Fresh (untouched) arrays keep
-  // what they touch resident only.
+  // workspace; repairs push few candidates and search locally, but all over the surface on
+  // noisy data: their searches use a hash table sized to one search, and a fresh (untouched)
+  // slot array keeps only the pages they touch resident.
   std::vector<std::uint32_t>().swap(heap_);
   slot_ = ZeroedArray<std::uint32_t>(g_.num_vertices());
-  ws_ = PathWorkspace(g_.num_vertices(), /*predecessors=*/false);
+  ws_ = PathWorkspace::sparse(/*predecessors=*/false);
 }
 
 std::vector<std::uint32_t> DiskCover::take_new_disks() {

@@ -191,10 +191,17 @@ HybridResult hybrid_triangles(const SurfelComplex& sc, const std::vector<std::ui
   using Tri = std::array<std::uint32_t, 3>;
   std::vector<Tri> owned;
   std::vector<std::uint8_t> problem(ncell, 0);
+  {  // counted first: the list is the largest array here, it should not grow by copies
+    std::size_t count = 0;
+    for (std::uint32_t x = 0; x < ncell; ++x)
+      if (first[x] < first[x + 1] &&
+          !cell_triangles(x, [&](const Tri& t) { count += t[0] == x; }))
+        problem[x] = 1;
+    owned.reserve(count);
+  }
   for (std::uint32_t x = 0; x < ncell; ++x)
-    if (first[x] < first[x + 1] &&
-        !cell_triangles(x, [&](const Tri& t) { if (t[0] == x) owned.push_back(t); }))
-      problem[x] = 1;
+    if (!problem[x] && first[x] < first[x + 1])
+      cell_triangles(x, [&](const Tri& t) { if (t[0] == x) owned.push_back(t); });
   std::sort(owned.begin(), owned.end());
   std::vector<std::uint8_t> copies(owned.size(), 0);  // other cells' copies, on the first entry
   std::vector<Tri> orphans;

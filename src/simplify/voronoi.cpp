@@ -24,12 +24,11 @@ bool ccw_fan(const SurfelComplex& sc, std::uint32_t n, std::array<std::int32_t, 
     if (f < 0) return false;
   const auto u = static_cast<std::uint32_t>(fan[0]);
   const auto nodes = sc.nodes_of(u);
-  const auto opp = sc.opposites_of(u);
   const std::size_t k = nodes.size();
   std::size_t i = 0;
   while (i < k && nodes[i] != n) ++i;
   assert(i < k);
-  const std::int32_t incoming = opp[(i + k - 1) % k];
+  const std::int32_t incoming = sc.opposite(u, (i + k - 1) % k);
   // Seen from outside, the surfels around a node follow u, the neighbour across u's incoming
   // edge, the diagonal one, the neighbour across u's outgoing edge (counter-clockwise).
   if (fan[1] == incoming) out = fan;
@@ -388,49 +387,67 @@ void dual_violations(const SurfelComplex& sc, const std::vector<std::uint32_t>& 
                      std::vector<std::uint32_t>& violated, std::vector<std::size_t>* kinds) {
   // Memory (docs/SIMPLIFICATION.md): junctions are visited twice instead of being stored (first
   // for pinches and the triangle count, then to build the triangles); lists are sized once.
+  auto key = [](std::uint32_t a, std::uint32_t b) {
+    if (a > b) std::swap(a, b);
+    return (std::uint64_t(a) << 32) | b;
+  };
   std::vector<std::uint32_t> pinched;
+  std::vector<std::uint64_t> diagonals;  // both diagonals of every 4-cell junction
   std::size_t max_triangles = 0;
   std::array<std::uint32_t, 4> runs;
   int r = 0;
   for (std::uint32_t n = 0; n < sc.num_nodes(); ++n) {
     const JunctionKind kind = junction_at(sc, cell, n, runs, r);
-    if (kind == JunctionKind::pinched)
+    if (kind == JunctionKind::pinched) {
       for (int i = 0; i < r; ++i) pinched.push_back(runs[i]);
-    else if (kind == JunctionKind::junction)
+    } else if (kind == JunctionKind::junction) {
       max_triangles += static_cast<std::size_t>(r - 2);
+      if (r == 4) {
+        diagonals.push_back(key(runs[0], runs[2]));
+        diagonals.push_back(key(runs[1], runs[3]));
+      }
+    }
   }
   std::sort(pinched.begin(), pinched.end());
   pinched.erase(std::unique(pinched.begin(), pinched.end()), pinched.end());
   violated.insert(violated.end(), pinched.begin(), pinched.end());
   if (kinds) (*kinds)[kFanPinch] += pinched.size();
 
-  // Edges of the dual: pairs of cells adjacent across a polygon edge.
-  auto key = [](std::uint32_t a, std::uint32_t b) {
-    if (a > b) std::swap(a, b);
-    return (std::uint64_t(a) << 32) | b;
-  };
-  std::vector<std::uint64_t> edges;
-  auto cross = [&](std::uint32_t u, std::int32_t o) {
-    return o >= 0 && cell[o] != cell[u] && cell[o] != Voronoi::kNone && cell[u] < cell[o];
-  };
-  {
-    std::size_t count = 0;
-    for (std::uint32_t u = 0; u < sc.num_surfels(); ++u)
-      if (cell[u] != Voronoi::kNone)
-        for (auto o : sc.opposites_of(u)) count += cross(u, o);
-    edges.reserve(count);
+  // Which quad diagonals are edges of the dual already (cells adjacent across a polygon edge).
+  // Memory: only the diagonals are listed, not every dual edge.
+  std::sort(diagonals.begin(), diagonals.end());
+  diagonals.erase(std::unique(diagonals.begin(), diagonals.end()), diagonals.end());
+  // Two cells are adjacent across a segment exactly when they hold consecutive surfels of a
+  // node's fan (voxels of neighbouring quadrants share the face the segment from the node lies
+  // on), so one pass over the fans finds them; only cells on some diagonal are looked up.
+  std::vector<std::uint8_t> is_edge(diagonals.size(), 0);
+  if (!diagonals.empty()) {
+    std::vector<std::uint64_t> on_diagonal;
+    for (const auto k : diagonals)
+      for (const std::uint32_t c : {static_cast<std::uint32_t>(k >> 32), static_cast<std::uint32_t>(k)}) {
+        if (c / 64 >= on_diagonal.size()) on_diagonal.resize(c / 64 + 1, 0);
+        on_diagonal[c / 64] |= std::uint64_t{1} << (c % 64);
+      }
+    auto flagged = [&](std::uint32_t c) {
+      return c / 64 < on_diagonal.size() && (on_diagonal[c / 64] >> (c % 64) & 1);
+    };
+    for (std::uint32_t n = 0; n < sc.num_nodes(); ++n) {
+      const auto& fan = sc.node_fan[n];
+      for (int q = 0; q < 4; ++q) {
+        const std::int32_t s0 = fan[q], s1 = fan[(q + 1) & 3];
+        if (s0 < 0 || s1 < 0) continue;
+        const std::uint32_t a = cell[static_cast<std::uint32_t>(s0)], b = cell[static_cast<std::uint32_t>(s1)];
+        if (a == b || a == Voronoi::kNone || b == Voronoi::kNone || !flagged(a) || !flagged(b)) continue;
+        const auto it = std::lower_bound(diagonals.begin(), diagonals.end(), key(a, b));
+        if (it != diagonals.end() && *it == key(a, b)) is_edge[it - diagonals.begin()] = 1;
+      }
+    }
   }
-  for (std::uint32_t u = 0; u < sc.num_surfels(); ++u) {
-    if (cell[u] == Voronoi::kNone) continue;
-    for (auto o : sc.opposites_of(u))
-      if (cross(u, o)) edges.push_back(key(cell[u], cell[o]));
-  }
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
   std::unordered_set<std::uint64_t> added;  // diagonals chosen for quads so far
   auto has_edge = [&](std::uint32_t a, std::uint32_t b) {
     const auto k = key(a, b);
-    return std::binary_search(edges.begin(), edges.end(), k) ||
+    const auto it = std::lower_bound(diagonals.begin(), diagonals.end(), k);
+    return (it != diagonals.end() && *it == k && is_edge[it - diagonals.begin()]) ||
            added.count(k) != 0;
   };
 
