@@ -353,12 +353,15 @@ namespace {
 
 enum class JunctionKind { none, junction, pinched };
 
-/// The junction at node n: `runs` holds the r distinct cells of its complete fan (CCW seen from
-/// outside) for a junction (r = 3 or 4), or the cells of a fan pinch (a cell twice apart).
+/// The junction at node n: `runs` holds the r distinct cells of its complete fan, in cyclic fan
+/// order (either orientation: nothing below depends on it — runs, pinches, the diagonal pairs and
+/// the sorted triangles are the same for the reversed cycle), for a junction (r = 3 or 4), or
+/// the cells of a fan pinch (a cell twice apart).
 JunctionKind junction_at(const SurfelComplex& sc, const std::vector<std::uint32_t>& cell,
                          std::uint32_t n, std::array<std::uint32_t, 4>& runs, int& r) {
-  std::array<std::int32_t, 4> fan;
-  if (!ccw_fan(sc, n, fan)) return JunctionKind::none;
+  const std::array<std::int32_t, 4>& fan = sc.node_fan[n];
+  for (const auto f : fan)
+    if (f < 0) return JunctionKind::none;
   std::array<std::uint32_t, 4> c;
   for (int q = 0; q < 4; ++q) {
     c[q] = cell[static_cast<std::uint32_t>(fan[q])];
@@ -451,55 +454,85 @@ void dual_violations(const SurfelComplex& sc, const std::vector<std::uint32_t>& 
            added.count(k) != 0;
   };
 
-  // The dual's triangles, each as its sorted cell triple (only duplicates matter here).
-  std::vector<std::array<std::uint32_t, 3>> triangles;
-  triangles.reserve(max_triangles);
-  auto emit = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
-    std::array<std::uint32_t, 3> t{a, b, c};
-    std::sort(t.begin(), t.end());
-    triangles.push_back(t);
-  };
-  for (std::uint32_t n = 0; n < sc.num_nodes(); ++n) {
-    if (junction_at(sc, cell, n, runs, r) != JunctionKind::junction) continue;
-    const auto& c = runs;
-    if (r == 3) {
-      emit(c[0], c[1], c[2]);
-      continue;
-    }
-    auto len = [&](std::uint32_t a, std::uint32_t b) {
-      return distance(sc.cvertex_position(centre_of_cell[a]), sc.cvertex_position(centre_of_cell[b]));
+  // The dual's triangles, each as its sorted cell triple; only duplicates matter here (two
+  // junctions with the same three cells). Memory: instead of listing every triangle (12 bytes
+  // each), a first pass sets one bit per triangle in a hashed bitmap (16 bits per triangle) and
+  // keeps the triangles whose bit was set already; a second pass counts those candidates exactly.
+  using Tri = std::array<std::uint32_t, 3>;
+  auto for_each_triangle = [&](bool first_pass, auto&& emit_sorted) {
+    added.clear();
+    auto emit = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+      Tri t{a, b, c};
+      std::sort(t.begin(), t.end());
+      emit_sorted(t);
     };
-    const bool ac_exists = has_edge(c[0], c[2]), bd_exists = has_edge(c[1], c[3]);
-    bool use_ac;
-    if (ac_exists && bd_exists) {
-      for (int q = 0; q < 4; ++q) violated.push_back(c[q]);
-      if (kinds) ++(*kinds)[kFanPinch];
-      continue;
-    } else if (ac_exists) {
-      use_ac = false;
-    } else if (bd_exists) {
-      use_ac = true;
-    } else {
-      const double lac = len(c[0], c[2]), lbd = len(c[1], c[3]);
-      use_ac = lac < lbd || (lac == lbd && std::min(c[0], c[2]) < std::min(c[1], c[3]));
+    for (std::uint32_t n = 0; n < sc.num_nodes(); ++n) {
+      if (junction_at(sc, cell, n, runs, r) != JunctionKind::junction) continue;
+      const auto& c = runs;
+      if (r == 3) {
+        emit(c[0], c[1], c[2]);
+        continue;
+      }
+      auto len = [&](std::uint32_t a, std::uint32_t b) {
+        return distance(sc.cvertex_position(centre_of_cell[a]), sc.cvertex_position(centre_of_cell[b]));
+      };
+      const bool ac_exists = has_edge(c[0], c[2]), bd_exists = has_edge(c[1], c[3]);
+      bool use_ac;
+      if (ac_exists && bd_exists) {
+        if (first_pass) {
+          for (int q = 0; q < 4; ++q) violated.push_back(c[q]);
+          if (kinds) ++(*kinds)[kFanPinch];
+        }
+        continue;
+      } else if (ac_exists) {
+        use_ac = false;
+      } else if (bd_exists) {
+        use_ac = true;
+      } else {
+        const double lac = len(c[0], c[2]), lbd = len(c[1], c[3]);
+        use_ac = lac < lbd || (lac == lbd && std::min(c[0], c[2]) < std::min(c[1], c[3]));
+      }
+      if (use_ac) {
+        emit(c[0], c[1], c[2]);
+        emit(c[0], c[2], c[3]);
+        added.insert(key(c[0], c[2]));
+      } else {
+        emit(c[0], c[1], c[3]);
+        emit(c[1], c[2], c[3]);
+        added.insert(key(c[1], c[3]));
+      }
     }
-    if (use_ac) {
-      emit(c[0], c[1], c[2]);
-      emit(c[0], c[2], c[3]);
-      added.insert(key(c[0], c[2]));
-    } else {
-      emit(c[0], c[1], c[3]);
-      emit(c[1], c[2], c[3]);
-      added.insert(key(c[1], c[3]));
-    }
+  };
+  const std::uint64_t bits = 64 * (max_triangles / 4 + 1);  // ≥ 16 per triangle
+  std::vector<std::uint64_t> seen(bits / 64, 0);
+  auto hash = [&](const Tri& t) {  // a bit index in [0, bits): 32 mixed bits scaled to the range
+    std::uint64_t h = (std::uint64_t{t[0]} * 0x9E3779B97F4A7C15ull) ^ t[1];
+    h = (h * 0xC2B2AE3D27D4EB4Full) ^ t[2];
+    h *= 0x165667B19E3779F9ull;
+    return ((h >> 32) * bits) >> 32;
+  };
+  std::vector<Tri> candidates;
+  for_each_triangle(true, [&](const Tri& t) {
+    const std::uint64_t b = hash(t);
+    std::uint64_t& word = seen[b / 64];
+    if (word >> (b % 64) & 1) candidates.push_back(t);
+    word |= std::uint64_t{1} << (b % 64);
+  });
+  std::vector<std::uint64_t>().swap(seen);
+  if (!candidates.empty()) {
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    std::vector<std::uint32_t> count(candidates.size(), 0);
+    for_each_triangle(false, [&](const Tri& t) {
+      const auto it = std::lower_bound(candidates.begin(), candidates.end(), t);
+      if (it != candidates.end() && *it == t) ++count[static_cast<std::size_t>(it - candidates.begin())];
+    });
+    for (std::size_t i = 0; i < candidates.size(); ++i)
+      for (std::uint32_t k = 1; k < count[i]; ++k) {
+        for (auto c : candidates[i]) violated.push_back(c);
+        if (kinds) ++(*kinds)[kDuplicate];
+      }
   }
-  // Two junctions with the same three cells give the same triangle twice.
-  std::sort(triangles.begin(), triangles.end());
-  for (std::size_t i = 1; i < triangles.size(); ++i)
-    if (triangles[i] == triangles[i - 1]) {
-      for (auto c : triangles[i]) violated.push_back(c);
-      if (kinds) ++(*kinds)[kDuplicate];
-    }
   std::sort(violated.begin(), violated.end());
   violated.erase(std::unique(violated.begin(), violated.end()), violated.end());
 }
