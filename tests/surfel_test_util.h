@@ -164,7 +164,13 @@ inline int validate_complex(const SurfelComplex& cx) {
     if (errors++ < 5) ADD_FAILURE() << what;
   };
   const std::size_t nn = cx.num_nodes(), ns = cx.num_surfels();
-  if (cx.node_pos.size() != 3 * nn || cx.node_fan.size() != nn) bad("node array sizes");
+  if (cx.node_pos.size() != 3 * nn || cx.node_fan.size() != nn || cx.node_turn.size() != nn)
+    bad("node array sizes");
+  for (const auto t : cx.node_turn)
+    if (t != 1 && t != 3) {
+      bad("node_turn not 1 or 3");
+      break;
+    }
   if (cx.surfel_offset.size() != ns + 1 || cx.cvertex.size() != 3 * ns) bad("surfel array sizes");
   if (cx.surfel_offset.back() != cx.surfel_nodes.size()) bad("CSR sizes");
   for (std::size_t n = 1; n < nn; ++n)
@@ -235,6 +241,10 @@ inline int validate_complex(const SurfelComplex& cx) {
       const std::uint32_t a = nodes[k], b = nodes[(k + 1) % nodes.size()];
       const std::int32_t t = opp[k];
       if (t < 0) {
+        for (const auto f : cx.node_fan[a])
+          if (f >= 0 && f != static_cast<std::int32_t>(s))
+            for (const auto h : cx.node_fan[b])
+              if (h == f) bad("border segment whose nodes share another surfel");
         // Border segment: both nodes on one boundary face of the grid.
         bool on_face = false;
         for (int ax = 0; ax < 3; ++ax) {
@@ -252,6 +262,13 @@ inline int validate_complex(const SurfelComplex& cx) {
         if (!on_face) bad("border segment not on a boundary face");
         continue;
       }
+      // Independently of node_turn: the surfel across the segment is the one fan member other
+      // than s that both end nodes' fans hold.
+      std::int32_t both = -1;
+      for (const auto f : cx.node_fan[a])
+        if (f >= 0 && f != static_cast<std::int32_t>(s))
+          for (const auto h : cx.node_fan[b]) both = h == f ? f : both;
+      if (both != t) bad("opposite differs from the common fan member");
       const auto tn = cx.nodes_of(t);
       const auto to = cx.opposites_of(t);
       bool found = false;

@@ -256,6 +256,7 @@ TEST(Surfels, ThreadCountDoesNotChangeTheResult) {
     EXPECT_EQ(a.node_key, x->node_key);
     EXPECT_EQ(a.node_pos, x->node_pos);
     EXPECT_EQ(a.node_fan, x->node_fan);
+    EXPECT_EQ(a.node_turn, x->node_turn);
     EXPECT_EQ(a.surfel_offset, x->surfel_offset);
     EXPECT_EQ(a.surfel_nodes, x->surfel_nodes);
     EXPECT_EQ(a.surfel_voxel, x->surfel_voxel);

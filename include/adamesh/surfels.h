@@ -50,6 +50,10 @@ struct SurfelComplex {
   /// cyclic permutation (x: y,z; y: z,x; z: x,y) and the quadrants are (−,−), (+,−), (+,+), (−,+):
   /// counter-clockwise about the +axis direction.
   std::vector<std::array<std::int32_t, 4>> node_fan;
+  /// 1 or 3: the fan slot of the surfel across a surfel's outgoing polygon edge at this node,
+  /// relative to the surfel's own slot (the surface's orientation about the edge's axis; the
+  /// same for every surfel of the fan). This is how opposites are found without storing them.
+  std::vector<std::uint8_t> node_turn;
 
   // ---- Surfels (CSR). ----
   std::vector<std::uint32_t> surfel_offset;   ///< size num_surfels()+1
@@ -70,42 +74,32 @@ struct SurfelComplex {
   }
   /// The surfel across polygon edge k = (n[k], n[k+1]) of s — the one sharing that face segment
   /// in the neighbouring voxel — or -1 when the segment lies on the volume border. Not stored
-  /// (memory: 16 bytes per surfel): of the two fan neighbours of s at n[k], the one that is
-  /// also in the fan of n[k+1] (the diagonal voxel never contains the other grid edge).
+  /// (memory: 16 bytes per surfel): read off the fan of n[k], node_turn slots after s's own.
   std::int32_t opposite(std::size_t s, std::size_t k) const noexcept {
-    const std::uint32_t b = surfel_offset[s], len = surfel_offset[s + 1] - b;
-    return opposite_on(s, node_fan[surfel_nodes[b + k]],
-                       node_fan[surfel_nodes[b + (k + 1 == len ? 0 : k + 1)]]);
+    const std::uint32_t n = surfel_nodes[surfel_offset[s] + k];
+    return opposite_at(s, n);
   }
   /// opposite(s, k) for every polygon edge of s, in polygon order.
   PolygonOpposites opposites_of(std::size_t s) const noexcept {
     PolygonOpposites out;
-    const std::uint32_t b = surfel_offset[s], len = surfel_offset[s + 1] - b;
-    out.n = len;
-    const std::array<std::int32_t, 4>* first = &node_fan[surfel_nodes[b]];
-    const std::array<std::int32_t, 4>* fa = first;
-    for (std::uint32_t k = 0; k < len; ++k) {
-      const std::array<std::int32_t, 4>* fb = k + 1 == len ? first : &node_fan[surfel_nodes[b + k + 1]];
-      out.v[k] = opposite_on(s, *fa, *fb);
-      fa = fb;
-    }
+    const std::uint32_t b = surfel_offset[s];
+    out.n = surfel_offset[s + 1] - b;
+    for (std::uint32_t k = 0; k < out.n; ++k) out.v[k] = opposite_at(s, surfel_nodes[b + k]);
     return out;
+  }
+  /// The surfel across s's outgoing polygon edge at node n (n a node of s), or -1.
+  std::int32_t opposite_at(std::size_t s, std::uint32_t n) const noexcept {
+    const auto& fan = node_fan[n];
+    const auto self = static_cast<std::int32_t>(s);
+    int q = 0;
+    while (q < 3 && fan[q] != self) ++q;
+    return fan[(q + node_turn[n]) & 3];
   }
   Vec3 node_position(std::size_t n) const noexcept {
     return {node_pos[3 * n], node_pos[3 * n + 1], node_pos[3 * n + 2]};
   }
   Vec3 cvertex_position(std::size_t s) const noexcept {
     return {cvertex[3 * s], cvertex[3 * s + 1], cvertex[3 * s + 2]};
-  }
-  /// The surfel of fan_a that is beside s (slot ±1 from s's own) and also in fan_b, or -1.
-  static std::int32_t opposite_on(std::size_t s, const std::array<std::int32_t, 4>& fan_a,
-                                  const std::array<std::int32_t, 4>& fan_b) noexcept {
-    const auto self = static_cast<std::int32_t>(s);
-    int q = 0;
-    while (q < 3 && fan_a[q] != self) ++q;
-    for (const std::int32_t c : {fan_a[(q + 1) & 3], fan_a[(q + 3) & 3]})
-      if (c >= 0 && (c == fan_b[0] || c == fan_b[1] || c == fan_b[2] || c == fan_b[3])) return c;
-    return -1;
   }
   /// Node id for an edge key, or -1 (binary search).
   std::int64_t find_node(std::uint64_t key) const noexcept;

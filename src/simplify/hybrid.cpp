@@ -126,14 +126,17 @@ HybridResult hybrid_triangles(const SurfelComplex& sc, const std::vector<std::ui
   std::sort(kept_list.begin(), kept_list.end());
   kept_list.erase(std::unique(kept_list.begin(), kept_list.end()), kept_list.end());
   // Kept node kept_list[i] is vertex ncell + i.
-  auto is_kept = [&](std::uint32_t n) {
-    return std::binary_search(kept_list.begin(), kept_list.end(), n);
-  };
+  // Bitsets over the nodes answer "kept?" and "has a diagonal?" before any binary search.
+  std::vector<std::uint64_t> kept_bits((sc.num_nodes() + 63) / 64, 0), diagonal_bits(kept_bits);
+  for (const auto n : kept_list) kept_bits[n >> 6] |= std::uint64_t{1} << (n & 63);
+  for (const auto& d : diagonal) diagonal_bits[d.node >> 6] |= std::uint64_t{1} << (d.node & 63);
+  auto is_kept = [&](std::uint32_t n) { return (kept_bits[n >> 6] >> (n & 63) & 1) != 0; };
   auto kept_vertex = [&](std::uint32_t n) {
     return ncell + static_cast<std::uint32_t>(
                        std::lower_bound(kept_list.begin(), kept_list.end(), n) - kept_list.begin());
   };
   auto find_diagonal = [&](std::uint32_t n) -> const Diagonal* {
+    if (!(diagonal_bits[n >> 6] >> (n & 63) & 1)) return nullptr;
     auto it = std::lower_bound(diagonal.begin(), diagonal.end(), n,
                                [](const Diagonal& d, std::uint32_t key) { return d.node < key; });
     return it != diagonal.end() && it->node == n ? &*it : nullptr;

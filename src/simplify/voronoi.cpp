@@ -12,7 +12,6 @@
 #include <bit>
 #include <cassert>
 #include <queue>
-#include <unordered_set>
 
 #include "graph/shortest_paths.h"
 
@@ -416,42 +415,53 @@ void dual_violations(const SurfelComplex& sc, const std::vector<std::uint32_t>& 
   violated.insert(violated.end(), pinched.begin(), pinched.end());
   if (kinds) (*kinds)[kFanPinch] += pinched.size();
 
-  // Which quad diagonals are edges of the dual already (cells adjacent across a polygon edge).
-  // Memory: only the diagonals are listed, not every dual edge.
-  std::sort(diagonals.begin(), diagonals.end());
-  diagonals.erase(std::unique(diagonals.begin(), diagonals.end()), diagonals.end());
+  // Which quad diagonals are edges of the dual already (cells adjacent across a polygon edge),
+  // and which ones the quads below have chosen: flags in an open-addressing table of the
+  // diagonals (memory: only the diagonals are listed, not every dual edge).
+  constexpr std::uint8_t kIsEdge = 1, kAdded = 2;
+  std::size_t cap = 16;
+  while (cap < 2 * diagonals.size()) cap *= 2;
+  std::vector<std::uint64_t> table(cap, 0);  // 0 = empty (a key's larger cell is never 0)
+  std::vector<std::uint8_t> flags(cap, 0);
+  auto slot_of = [&](std::uint64_t k) {
+    std::size_t i = static_cast<std::size_t>((k * 0x9E3779B97F4A7C15ull) >> 20) & (cap - 1);
+    while (table[i] != 0 && table[i] != k) i = (i + 1) & (cap - 1);
+    return i;
+  };
+  for (const auto k : diagonals) table[slot_of(k)] = k;
+  // Cells on some diagonal (centre_of_cell is indexed by cell id).
+  std::vector<std::uint64_t> on_diagonal((centre_of_cell.size() + 63) / 64, 0);
+  for (const auto k : diagonals)
+    for (const std::uint32_t c : {static_cast<std::uint32_t>(k >> 32), static_cast<std::uint32_t>(k)})
+      on_diagonal[c / 64] |= std::uint64_t{1} << (c % 64);
+  const bool any_diagonal = !diagonals.empty();
+  std::vector<std::uint64_t>().swap(diagonals);
+  auto flagged = [](const std::vector<std::uint64_t>& bits, std::uint32_t c) {
+    return (bits[c / 64] >> (c % 64) & 1) != 0;
+  };
   // Two cells are adjacent across a segment exactly when they hold consecutive surfels of a
   // node's fan (voxels of neighbouring quadrants share the face the segment from the node lies
-  // on), so one pass over the fans finds them; only cells on some diagonal are looked up.
-  std::vector<std::uint8_t> is_edge(diagonals.size(), 0);
-  if (!diagonals.empty()) {
-    std::vector<std::uint64_t> on_diagonal;
-    for (const auto k : diagonals)
-      for (const std::uint32_t c : {static_cast<std::uint32_t>(k >> 32), static_cast<std::uint32_t>(k)}) {
-        if (c / 64 >= on_diagonal.size()) on_diagonal.resize(c / 64 + 1, 0);
-        on_diagonal[c / 64] |= std::uint64_t{1} << (c % 64);
-      }
-    auto flagged = [&](std::uint32_t c) {
-      return c / 64 < on_diagonal.size() && (on_diagonal[c / 64] >> (c % 64) & 1);
-    };
+  // on), so one pass over the fans finds them.
+  if (any_diagonal)
     for (std::uint32_t n = 0; n < sc.num_nodes(); ++n) {
       const auto& fan = sc.node_fan[n];
       for (int q = 0; q < 4; ++q) {
         const std::int32_t s0 = fan[q], s1 = fan[(q + 1) & 3];
         if (s0 < 0 || s1 < 0) continue;
         const std::uint32_t a = cell[static_cast<std::uint32_t>(s0)], b = cell[static_cast<std::uint32_t>(s1)];
-        if (a == b || a == Voronoi::kNone || b == Voronoi::kNone || !flagged(a) || !flagged(b)) continue;
-        const auto it = std::lower_bound(diagonals.begin(), diagonals.end(), key(a, b));
-        if (it != diagonals.end() && *it == key(a, b)) is_edge[it - diagonals.begin()] = 1;
+        if (a == b || a == Voronoi::kNone || b == Voronoi::kNone || !flagged(on_diagonal, a) ||
+            !flagged(on_diagonal, b))
+          continue;
+        const std::size_t i = slot_of(key(a, b));
+        if (table[i] != 0) flags[i] |= kIsEdge;
       }
     }
-  }
-  std::unordered_set<std::uint64_t> added;  // diagonals chosen for quads so far
-  auto has_edge = [&](std::uint32_t a, std::uint32_t b) {
-    const auto k = key(a, b);
-    const auto it = std::lower_bound(diagonals.begin(), diagonals.end(), k);
-    return (it != diagonals.end() && *it == k && is_edge[it - diagonals.begin()]) ||
-           added.count(k) != 0;
+  auto has_edge = [&](std::uint32_t a, std::uint32_t b) {  // (a, b): a quad's diagonal
+    return flags[slot_of(key(a, b))] != 0;
+  };
+  auto add = [&](std::uint32_t a, std::uint32_t b) { flags[slot_of(key(a, b))] |= kAdded; };
+  auto clear_added = [&] {
+    for (auto& f : flags) f &= static_cast<std::uint8_t>(~kAdded);
   };
 
   // The dual's triangles, each as its sorted cell triple; only duplicates matter here (two
@@ -460,7 +470,7 @@ void dual_violations(const SurfelComplex& sc, const std::vector<std::uint32_t>& 
   // keeps the triangles whose bit was set already; a second pass counts those candidates exactly.
   using Tri = std::array<std::uint32_t, 3>;
   auto for_each_triangle = [&](bool first_pass, auto&& emit_sorted) {
-    added.clear();
+    clear_added();
     auto emit = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
       Tri t{a, b, c};
       std::sort(t.begin(), t.end());
@@ -495,11 +505,11 @@ void dual_violations(const SurfelComplex& sc, const std::vector<std::uint32_t>& 
       if (use_ac) {
         emit(c[0], c[1], c[2]);
         emit(c[0], c[2], c[3]);
-        added.insert(key(c[0], c[2]));
+        add(c[0], c[2]);
       } else {
         emit(c[0], c[1], c[3]);
         emit(c[1], c[2], c[3]);
-        added.insert(key(c[1], c[3]));
+        add(c[1], c[3]);
       }
     }
   };
@@ -523,7 +533,12 @@ void dual_violations(const SurfelComplex& sc, const std::vector<std::uint32_t>& 
     std::sort(candidates.begin(), candidates.end());
     candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
     std::vector<std::uint32_t> count(candidates.size(), 0);
+    std::vector<std::uint64_t> in_candidate(on_diagonal.size(), 0);
+    for (const Tri& t : candidates)
+      for (const auto c : t) in_candidate[c / 64] |= std::uint64_t{1} << (c % 64);
     for_each_triangle(false, [&](const Tri& t) {
+      if (!flagged(in_candidate, t[0]) || !flagged(in_candidate, t[1]) || !flagged(in_candidate, t[2]))
+        return;
       const auto it = std::lower_bound(candidates.begin(), candidates.end(), t);
       if (it != candidates.end() && *it == t) ++count[static_cast<std::size_t>(it - candidates.begin())];
     });

@@ -12,7 +12,8 @@
 //              planes resident; a voxel's case is two 4-bit "quad codes" of adjacent planes.
 //   2. prefix: plane/layer offsets, so every id is fixed before anything is written.
 //   3. fill:   each slab writes its planes' nodes (key order = id order) and its layers' surfels
-//              (voxel (z,y,x) order, cycles in configuration order) and node_fan slots.
+//              (voxel (z,y,x) order, cycles in configuration order), node_fan slots and
+//              node_turn (the fan slot offset of the surfel across an outgoing edge).
 //   4. link:   per surfel, c-vertex = mean of its nodes.
 // Node ids of a plane are found through per-plane arrays (first id, edge mask) (no hashing).
 // The result depends only on the data: identical bytes for any thread count or slab split.
@@ -366,6 +367,11 @@ class Extractor {
           const std::uint32_t node = maps[edge_plane_[e]]->id(p + edge_offset_[e], edge_axis_[e]);
           out.surfel_nodes[entry] = node;
           out.node_fan[node][edge_slot_[e]] = s;
+          // The same for every surfel of the node; written from the voxel layer of the node's
+          // own plane (one slab, no concurrent writes), from below on the top plane.
+          if (edge_plane_[e] == 0 || k + 2 == nz_)
+            out.node_turn[node] =
+                static_cast<std::uint8_t>((cfg.opposite_quadrant[idx] - edge_slot_[e]) & 3);
         }
       }
     });
@@ -434,6 +440,7 @@ void extract(const Volume& volume, SurfelComplex& out, int threads) {
                        [&] {
                          detail::sized(out.node_fan, num_nodes, {-1, -1, -1, -1});
                        },
+                       [&] { detail::sized(out.node_turn, num_nodes); },
                        [&] { detail::sized(out.surfel_offset, num_surfels + 1); },
                        [&] { detail::sized(out.surfel_nodes, num_entries); },
                        [&] { detail::sized(out.surfel_voxel, num_surfels); },

@@ -173,8 +173,13 @@ CellConfig build_config(int c, unsigned decisions, bool mirrored) {
       // Mirrored (index-to-world map with negative determinant): reversed cycle, same start.
       const int e = mirrored ? cyc[(len - k) % len] : cyc[k];
       const int f = mirrored ? seg_face[cyc[(len - k - 1 + len) % len]] : seg_face[e];
+      const int axis = f / 2, side = f % 2;
+      // The voxel across face f, relative to this voxel.
+      std::array<int, 3> across{0, 0, 0};
+      across[axis] = side ? 1 : -1;
       cfg.edge[n] = static_cast<std::uint8_t>(e);
       cfg.face[n] = static_cast<std::uint8_t>(f);
+      cfg.opposite_quadrant[n] = static_cast<std::uint8_t>(g.quadrant(e, across));
       ++n;
     }
     cfg.cycle_len[cfg.num_cycles++] = static_cast<std::uint8_t>(len);

@@ -67,6 +67,9 @@ struct CellConfig {
   std::array<std::uint8_t, 4> cycle_len{};  ///< nodes per cycle, cycles concatenated below
   std::array<std::uint8_t, 12> edge{};      ///< local edge of each polygon node, in cycle order
   std::array<std::uint8_t, 12> face{};      ///< face of the segment from node k to node k+1
+  /// node_fan slot (around node k's edge) of the voxel across face[k]: the opposite surfel of
+  /// polygon edge k is node_fan[node k][opposite_quadrant[k]].
+  std::array<std::uint8_t, 12> opposite_quadrant{};
 };
 
 /// All configurations, generated once (cell_table()).
