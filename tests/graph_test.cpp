@@ -137,36 +137,6 @@ TEST(Graph, WideLayersFallBackToAbsoluteColumns) {
   check_graph(sc, g);
 }
 
-TEST(Graph, SetColumnsPicksTheEncodingAndKeepsNeighbours) {
-  // Path 0 - 1 - 2 plus an edge 0 - 40000: absolute; without it: compact.
-  ConnectivityGraph g;
-  const std::uint32_t n = 40001;
-  std::vector<std::vector<std::uint32_t>> adj(n);
-  auto add = [&](std::uint32_t a, std::uint32_t b) {
-    adj[a].push_back(b);
-    adj[b].push_back(a);
-  };
-  add(0, 1);
-  add(1, 2);
-  for (const bool far : {false, true}) {
-    if (far) add(0, 40000);
-    g.row.assign(n + 1, 0);
-    std::vector<std::uint32_t> col;
-    for (std::uint32_t v = 0; v < n; ++v) {
-      g.row[v + 1] = g.row[v] + static_cast<std::uint32_t>(adj[v].size());
-      col.insert(col.end(), adj[v].begin(), adj[v].end());
-    }
-    g.set_columns(col);
-    EXPECT_EQ(g.col.empty(), !far);
-    EXPECT_EQ(g.delta.empty(), far);
-    for (std::uint32_t v = 0; v < n; ++v) {
-      const auto row = g.neighbours(v);
-      EXPECT_EQ(std::vector<std::uint32_t>(row.begin(), row.end()), adj[v]);
-    }
-    EXPECT_EQ(g.num_edges(), far ? 3u : 2u);
-  }
-}
-
 TEST(Graph, ReleasedAdjacencyKeepsVertexData) {
   const Volume v = sample_volume({10, 10, 10}, [](double i, double j, double k) {
     return std::hypot(i - 4.5, j - 4.4, k - 4.6) - 3.2;

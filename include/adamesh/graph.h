@@ -27,7 +27,7 @@ struct ConnectivityGraph {
   /// Column array, absolute vertex ids. Empty when the columns are stored as `delta`.
   std::vector<std::uint32_t> col;
   /// Column array, compact form (memory: 2 instead of 4 bytes per directed edge): entry k of
-  /// row v is the neighbour v + delta[k]. set_columns() picks it whenever every neighbour lies
+  /// row v is the neighbour v + delta[k]. build_graph picks it whenever every neighbour lies
   /// within ±32767 ids of its vertex — on surfel graphs, whenever a voxel layer holds fewer than
   /// ~16k surfels, since surfel ids follow the voxel order.
   std::vector<std::int16_t> delta;
@@ -41,9 +41,6 @@ struct ConnectivityGraph {
   std::vector<std::uint32_t> component;   ///< component id, numbered by smallest vertex
   std::uint32_t num_components = 0;
 
-  /// Stores the column array `columns` (indexed like `row`, which must be set) in the compact
-  /// form when it fits, as absolute ids otherwise.
-  void set_columns(const std::vector<std::uint32_t>& columns);
   /// Drops the adjacency (row and columns); border flags, components, positions and
   /// num_vertices() stay, neighbours() and the edge accessors may no longer be called.
   /// Memory: stages that need no neighbours (the dual triangulation) run without it.

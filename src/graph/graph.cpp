@@ -47,22 +47,6 @@ bool delta_fits(std::size_t v, std::uint32_t u) {
 
 }  // namespace
 
-void ConnectivityGraph::set_columns(const std::vector<std::uint32_t>& columns) {
-  bool fits = true;
-  for (std::size_t v = 0; v + 1 < row.size() && fits; ++v)
-    for (std::size_t k = row[v]; k < row[v + 1]; ++k) fits &= delta_fits(v, columns[k]);
-  col.clear();
-  delta.clear();
-  if (!fits) {
-    col = columns;
-    return;
-  }
-  delta.resize(columns.size());
-  for (std::size_t v = 0; v + 1 < row.size(); ++v)
-    for (std::size_t k = row[v]; k < row[v + 1]; ++k)
-      delta[k] = static_cast<std::int16_t>(std::int64_t{columns[k]} - static_cast<std::int64_t>(v));
-}
-
 void ConnectivityGraph::release_adjacency() {
   std::vector<std::uint32_t>().swap(row);
   std::vector<std::uint32_t>().swap(col);
