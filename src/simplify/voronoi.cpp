@@ -387,8 +387,10 @@ namespace adamesh::detail {
 void dual_violations(const SurfelComplex& sc, const std::vector<std::uint32_t>& cell,
                      const std::vector<std::uint32_t>& centre_of_cell,
                      std::vector<std::uint32_t>& violated, std::vector<std::size_t>* kinds) {
-  // Memory (docs/SIMPLIFICATION.md): junctions are visited twice instead of being stored (first
-  // for pinches and the triangle count, then to build the triangles); lists are sized once.
+  // Memory (docs/SIMPLIFICATION.md): junctions are visited again instead of being stored — once
+  // for pinches, the triangle count and the quad diagonals, once over the fans for which
+  // diagonals are dual edges, once hashing the triangles and, when hashes collide, once more to
+  // count the colliding triangles exactly.
   auto key = [](std::uint32_t a, std::uint32_t b) {
     if (a > b) std::swap(a, b);
     return (std::uint64_t(a) << 32) | b;
