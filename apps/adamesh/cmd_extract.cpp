@@ -15,6 +15,7 @@
 #include "adamesh/atomic_file.h"
 #include "adamesh/error.h"
 #include "adamesh/graph.h"
+#include "adamesh/improve.h"
 #include "adamesh/input.h"
 #include "adamesh/io.h"
 #include "adamesh/metrics.h"
@@ -176,6 +177,19 @@ int cmd_extract(const Argv& argv) {
   timings["dual"] = clock.lap();
   rss["dual"] = peak_rss_mb();
 
+  // Level 0 is free to change until the blocks are built (docs/QUALITY.md): its slivers would be
+  // bisected into more.
+  ImproveStats base_improve;
+  if (!args.has("--no-improve")) {
+    progress.stage("improve M0");
+    ImproveOptions io;
+    io.voxel = sc.grid.min_spacing();
+    io.box = in.field->domain();
+    base_improve = improve_base_mesh(base, in.field.get(), iso, io);
+    progress.finish();
+    timings["improve_base"] = clock.lap();
+  }
+
   progress.stage("write");
   if (auto path = args.get("--base")) {
     if (args.has("--attributes")) {
@@ -200,6 +214,7 @@ int cmd_extract(const Argv& argv) {
     refined = run_refine_stage(args, in, iso, sc, g, base, nthreads, progress,
                                args.has("--report"));
     timings["refine"] = refined->refine_s;
+    timings["improve"] = refined->improve_s;
     timings["write"] = timings["write"].get<double>() + refined->write_s;
     clock.lap();
     rss["refine"] = peak_rss_mb();
@@ -220,6 +235,13 @@ int cmd_extract(const Argv& argv) {
     r["surfels"] = num_surfels;
     r["base"] = topology_json(topo);
     r["base"]["quality"] = {{"q_mean", quality(base.mesh).q_mean}};
+    r["base"]["improve"] = {{"flips", base_improve.flips},
+                            {"moves", base_improve.moves},
+                            {"collapses", base_improve.collapses},
+                            {"pct_below_20_before", base_improve.pct_below_20_before},
+                            {"pct_below_20_after", base_improve.pct_below_20_after},
+                            {"min_angle_before", base_improve.min_angle_before_deg},
+                            {"min_angle_after", base_improve.min_angle_after_deg}};
     r["fallback_components"] = st.fallback_components;
     r["dropped_components"] = st.dropped_components;
     r["covering"] = {{"r_max", st.r_max},

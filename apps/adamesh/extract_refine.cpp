@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "adamesh/error.h"
+#include "adamesh/improve.h"
 #include "adamesh/io.h"
 #include "adamesh/metrics.h"
 #include "adamesh/refine.h"
@@ -57,6 +58,8 @@ std::vector<OptionSpec> refine_option_specs() {
        "at most as many triangles as marching cubes)"},
       {"--triangles", true, "adaptive: the N-triangle mesh, worst triangles split first"},
       {"--hierarchy", true, "write the refinement hierarchy (.amh, see docs/HIERARCHY.md)"},
+      {"--no-improve", false,
+       "write the cut of the hierarchy as it is (no flips, moves or collapses for shape)"},
   };
 }
 
@@ -100,9 +103,20 @@ RefineStage run_refine_stage(const Args& args, const Input& in, double iso, cons
   Stopwatch clock;
   progress.stage("refine");
   const RefineResult r = refine(sc, base, *in.field, ro, &g);
-  const CutMesh cut = extract_all(r.hierarchy);
+  CutMesh cut = extract_all(r.hierarchy);
   progress.finish();
   out.refine_s = clock.lap();
+
+  ImproveStats imp;
+  if (!args.has("--no-improve")) {
+    progress.stage("improve");
+    ImproveOptions io;
+    io.voxel = h;
+    io.box = in.field->domain();
+    imp = improve_mesh(cut.mesh, cut.vertex_border, in.field.get(), iso, io);
+    progress.finish();
+    out.improve_s = clock.lap();
+  }
 
   progress.stage("write");
   if (auto path = args.get("-o")) {
@@ -133,6 +147,12 @@ RefineStage run_refine_stage(const Args& args, const Input& in, double iso, cons
                               {"euclidean", st.euclidean_placements},
                               {"border", st.border_placements},
                               {"unconverged", st.unconverged_projections}}},
+              {"improve", {{"flips", imp.flips}, {"moves", imp.moves},
+                           {"collapses", imp.collapses}, {"rounds", imp.rounds},
+                           {"min_angle_before", imp.min_angle_before_deg},
+                           {"min_angle_after", imp.min_angle_after_deg},
+                           {"pct_below_20_before", imp.pct_below_20_before},
+                           {"pct_below_20_after", imp.pct_below_20_after}}},
               {"triangles", cut.mesh.num_triangles()},
               {"vertices", cut.mesh.num_vertices()},
               {"warnings", st.warnings}};

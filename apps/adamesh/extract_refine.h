@@ -22,6 +22,7 @@ struct RefineStage {
   nlohmann::json levels = nlohmann::json::array();  ///< report "levels" (when measured)
   nlohmann::json info;                               ///< report "refine"
   double refine_s = 0;  ///< refinement and extraction
+  double improve_s = 0;  ///< shape improvement of the written mesh
   double write_s = 0;   ///< writing -o and --hierarchy
   std::string summary;  ///< one line for the terminal
 };

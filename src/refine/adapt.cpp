@@ -438,7 +438,7 @@ Placed place_vertex(const Surface& s, const EdgeInput& in, PathWorkspace& ws) {
     }
     lp = place_on_normal_line(s, in, check, ref_tol);
     if (lp.ok && lp.quality >= 0) {
-      out.position = lp.position;
+      out.position = vmin(vmax(lp.position, s.field.domain().lo), s.field.domain().hi);
       out.kind = PlacementKind::normal_line;
       out.anchor = greedy_walk(s.g, sc, mid_anchor, out.position);
       return out;
@@ -465,6 +465,22 @@ Placed place_vertex(const Surface& s, const EdgeInput& in, PathWorkspace& ws) {
     out.kind = PlacementKind::normal_line;
     out.converged = true;
   }
+  // Noise guard (docs/QUALITY.md): on sampled fields a projection that travels farther than a
+  // quarter of the edge follows a voxel-scale bump and lands next to another vertex (CT head:
+  // clusters of three vertices within 0.01 mm, surrounded by needles no flip or collapse can
+  // remove). The point before the projection is then kept when its triangles are better shaped.
+  if (in.ring_size == 4 && !s.field.is_analytic() && out.kind != PlacementKind::normal_line &&
+      distance(out.position, p) > 0.25 * elen) {
+    const Vec3 n = ring_normal(in, p);
+    if (ring_quality(in, p, n) > ring_quality(in, out.position, n)) {
+      out.position = p;
+      out.converged = false;
+    }
+  }
+  // Every vertex inside the volume's box (sampled fields clamp outside it, so a Newton step can
+  // leave it).
+  const Box box = s.field.domain();
+  out.position = vmin(vmax(out.position, box.lo), box.hi);
   out.anchor = greedy_walk(s.g, sc, mid_anchor, out.position);
   return out;
 }

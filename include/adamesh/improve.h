@@ -1,0 +1,74 @@
+// Shape improvement of a triangle mesh that lies on an iso-surface: edge flips that raise the
+// smallest angle, tangential vertex moves toward well-shaped triangles with re-projection onto the
+// surface, and collapses of needle edges — none of which changes the mesh's topology (components,
+// Euler characteristic, boundary loops) or moves a vertex off the volume's box.
+//
+// Why (docs/QUALITY.md): on noisy scans the base mesh and the bisection placements follow
+// voxel-scale bumps, and a 4-8 hierarchy passes a sliver on to all its descendants; the meshes
+// written to files are improved here, after the cut.
+//
+// References: Botsch & Kobbelt, "A remeshing approach to multiresolution modeling" (SGP 2004:
+// flips + tangential relaxation + projection); Dyer, Zhang & Möller, "Delaunay mesh construction"
+// (SGP 2007: flips limited by the surface change); Hoppe et al., "Mesh optimization" (1993:
+// collapses with the link condition).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "adamesh/field.h"
+#include "adamesh/mesh.h"
+#include "adamesh/simplify.h"
+#include "adamesh/vec.h"
+
+namespace adamesh {
+
+struct ImproveOptions {
+  /// Outer rounds of flips → moves → collapses (each stops early when nothing changes).
+  int rounds = 8;
+  /// Vertices whose incident triangles all have a smallest angle at or above this (degrees) are
+  /// left where they are: the moves aim at the bad triangles, not at a uniform mesh (adaptive
+  /// density is kept).
+  double target_angle_deg = 35;
+  /// Largest distance (world units) by which a flip or a collapse may move the surface, measured
+  /// at the new edge's midpoint against the iso-surface (with a field) or against the old edge
+  /// (without): a flip is refused when its new edge lies farther than max(this, the old edge's
+  /// distance). 0 = 0.25 × `voxel`.
+  double max_deviation = 0;
+  /// h, smallest voxel edge (world units): sets the default deviation and the projection steps.
+  double voxel = 1;
+  /// Collapse an edge of a triangle whose smallest angle is below this (degrees) when it is the
+  /// triangle's shortest edge and flips and moves could not fix it. 0 = no collapses (the
+  /// triangle count stays the same).
+  double collapse_below_deg = 12;
+  /// The box vertices must stay in (the volume's world box); empty (lo == hi) = no box.
+  Box box;
+};
+
+struct ImproveStats {
+  std::size_t flips = 0, moves = 0, collapses = 0;
+  int rounds = 0;
+  double min_angle_before_deg = 0, min_angle_after_deg = 0;
+  double pct_below_20_before = 0, pct_below_20_after = 0;
+};
+
+/// Improves `mesh` in place. `fixed` (empty, or one flag per vertex): vertices that must not move
+/// or disappear (volume-border vertices: they lie on the box faces). Edges on the mesh boundary
+/// are never flipped or collapsed. With `field`, moved vertices are projected onto its
+/// iso-surface `iso` and flips are judged by the field's distance; without, moves stay in the
+/// vertex's tangent plane. Deterministic (serial, fixed visiting order). Vertex attributes and
+/// normals are dropped when collapses renumber the vertices.
+/// `vertex_map` (optional): per input vertex, its index in the output (UINT32_MAX if removed).
+ImproveStats improve_mesh(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
+                          const ScalarField* field, double iso, const ImproveOptions& options = {},
+                          std::vector<std::uint32_t>* vertex_map = nullptr);
+
+/// The same on a base mesh M0 before refinement (ALGORITHM.md leaves level 0 free until the blocks
+/// are built): border vertices stay, the per-vertex anchor/border/component arrays follow the
+/// renumbering. Moves are small (under ¾ of the shortest incident edge), so anchors stay valid
+/// starting points for the refinement's graph searches.
+ImproveStats improve_base_mesh(BaseMesh& base, const ScalarField* field, double iso,
+                               const ImproveOptions& options = {});
+
+}  // namespace adamesh

@@ -1,0 +1,522 @@
+// Shape improvement on the iso-surface (include/adamesh/improve.h, docs/QUALITY.md).
+//
+// Each round:
+//   1. flips: every interior edge whose two triangles have a smallest angle below the target is
+//      flipped when the flip raises that smallest angle by ≥ 1°, the new edge does not exist
+//      yet, neither new triangle turns over, and the new edge lies within the deviation bound of
+//      the surface (one pass over the edges sorted by key, each triangle flipped once a pass);
+//   2. moves: every free vertex with a bad triangle around it moves toward the mean of its
+//      triangles' ideal apexes (the point that makes the opposite edge's triangle equilateral, in
+//      that triangle's plane), tangentially, then is projected onto the iso-surface; the move is
+//      kept only when the smallest angle around the vertex rises and no triangle turns over
+//      (step λ = 1, ½, ¼);
+//   3. collapses: a needle (smallest angle below `collapse_below_deg`, shortest edge under half
+//      the next) loses its shortest edge when the link condition holds (the two ends share only
+//      the two opposite vertices, both of valence > 3), the merged vertex projects onto the
+//      surface and the smallest angle around it rises.
+// Flips and link-condition collapses keep the surface's topology; moves keep the connectivity.
+// Everything is serial and visits elements in a fixed order, so the result is deterministic.
+#include "adamesh/improve.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <unordered_set>
+
+namespace adamesh {
+
+namespace {
+
+using Tri = std::array<std::uint32_t, 3>;
+constexpr double kDeg = std::numbers::pi / 180;
+
+double angle_at(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 u = b - a, v = c - a;
+  return std::atan2(norm(cross(u, v)), dot(u, v));
+}
+
+/// Smallest interior angle (radians) of triangle abc; 0 for a degenerate one.
+double min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const double x = angle_at(a, b, c), y = angle_at(b, c, a);
+  const double z = std::numbers::pi - x - y;
+  return std::max(0.0, std::min({x, y, z}));
+}
+
+Vec3 tri_normal(const Vec3& a, const Vec3& b, const Vec3& c) { return cross(b - a, c - a); }
+
+std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
+  return a < b ? (std::uint64_t{a} << 32) | b : (std::uint64_t{b} << 32) | a;
+}
+
+/// Distance between segments pq and rs (closest points, clamped).
+double segment_distance(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {
+  const Vec3 d1 = q - p, d2 = s - r, w = p - r;
+  const double a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, w);
+  double t1 = 0, t2 = 0;
+  if (a <= 0 && e <= 0) return norm(w);
+  if (a <= 0) {
+    t2 = std::clamp(f / e, 0.0, 1.0);
+  } else {
+    const double c = dot(d1, w);
+    if (e <= 0) {
+      t1 = std::clamp(-c / a, 0.0, 1.0);
+    } else {
+      const double b = dot(d1, d2), den = a * e - b * b;
+      t1 = den > 0 ? std::clamp((b * f - c * e) / den, 0.0, 1.0) : 0.0;
+      t2 = (b * t1 + f) / e;
+      if (t2 < 0) {
+        t2 = 0;
+        t1 = std::clamp(-c / a, 0.0, 1.0);
+      } else if (t2 > 1) {
+        t2 = 1;
+        t1 = std::clamp((b - c) / a, 0.0, 1.0);
+      }
+    }
+  }
+  return norm((p + t1 * d1) - (r + t2 * d2));
+}
+
+class Improver {
+ public:
+  Improver(Mesh& mesh, const std::vector<std::uint8_t>& fixed, const ScalarField* field,
+           double iso, const ImproveOptions& o)
+      : field_(field), iso_(iso), o_(o) {
+    const std::size_t nv = mesh.num_vertices(), nt = mesh.num_triangles();
+    p_.resize(nv);
+    for (std::size_t v = 0; v < nv; ++v) p_[v] = mesh.vertex(v);
+    t_.resize(nt);
+    for (std::size_t t = 0; t < nt; ++t)
+      t_[t] = {mesh.triangles[3 * t], mesh.triangles[3 * t + 1], mesh.triangles[3 * t + 2]};
+    fixed_.assign(nv, 0);
+    for (std::size_t v = 0; v < std::min(nv, fixed.size()); ++v) fixed_[v] = fixed[v];
+    tri_alive_.assign(nt, 1);
+    dev_ = o_.max_deviation > 0 ? o_.max_deviation : 0.25 * o_.voxel;
+    has_box_ = o_.box.hi.x > o_.box.lo.x;
+    mark_boundary_vertices();
+  }
+
+  ImproveStats run() {
+    ImproveStats st;
+    measure(st.min_angle_before_deg, st.pct_below_20_before);
+    for (int r = 0; r < o_.rounds; ++r) {
+      const std::size_t f = flip_pass();
+      const std::size_t m = move_pass();
+      const std::size_t c = o_.collapse_below_deg > 0 ? collapse_pass() : 0;
+      st.flips += f;
+      st.moves += m;
+      st.collapses += c;
+      st.rounds = r + 1;
+      if (f + m + c == 0) break;
+    }
+    // A last flip pass: the final moves can leave flippable pairs.
+    st.flips += flip_pass();
+    measure(st.min_angle_after_deg, st.pct_below_20_after);
+    return st;
+  }
+
+  void write(Mesh& mesh, bool renumbered, std::vector<std::uint32_t>* vertex_map) const {
+    if (vertex_map) {
+      vertex_map->resize(p_.size());
+      for (std::uint32_t v = 0; v < p_.size(); ++v) (*vertex_map)[v] = v;
+    }
+    if (!renumbered) {
+      for (std::size_t v = 0; v < p_.size(); ++v) {
+        mesh.positions[3 * v] = static_cast<float>(p_[v].x);
+        mesh.positions[3 * v + 1] = static_cast<float>(p_[v].y);
+        mesh.positions[3 * v + 2] = static_cast<float>(p_[v].z);
+      }
+      for (std::size_t t = 0; t < t_.size(); ++t)
+        for (int k = 0; k < 3; ++k) mesh.triangles[3 * t + k] = t_[t][k];
+      return;
+    }
+    std::vector<std::uint32_t> id(p_.size(), UINT32_MAX);
+    Mesh out;
+    for (std::size_t t = 0; t < t_.size(); ++t) {
+      if (!tri_alive_[t]) continue;
+      std::array<std::uint32_t, 3> n{};
+      for (int k = 0; k < 3; ++k) {
+        auto& i = id[t_[t][k]];
+        if (i == UINT32_MAX) i = out.add_vertex(p_[t_[t][k]]);
+        n[k] = i;
+      }
+      out.add_triangle(n[0], n[1], n[2]);
+    }
+    if (vertex_map) *vertex_map = std::move(id);
+    mesh = std::move(out);
+  }
+
+ private:
+  const ScalarField* field_;
+  double iso_;
+  ImproveOptions o_;
+  double dev_ = 0;
+  bool has_box_ = false;
+  std::vector<Vec3> p_;
+  std::vector<Tri> t_;
+  std::vector<std::uint8_t> fixed_, boundary_, tri_alive_;
+  std::vector<std::uint32_t> inc_off_, inc_;  // vertex -> alive triangles (CSR)
+
+  double tri_min_angle(const Tri& t) const { return min_angle(p_[t[0]], p_[t[1]], p_[t[2]]); }
+
+  void measure(double& min_deg, double& pct20) const {
+    double mn = 180;
+    std::size_t below = 0, n = 0;
+    for (std::size_t t = 0; t < t_.size(); ++t) {
+      if (!tri_alive_[t]) continue;
+      const double a = tri_min_angle(t_[t]) / kDeg;
+      mn = std::min(mn, a);
+      below += a < 20;
+      ++n;
+    }
+    min_deg = n ? mn : 0;
+    pct20 = n ? 100.0 * static_cast<double>(below) / static_cast<double>(n) : 0;
+  }
+
+  /// Vertices on an edge used by one triangle (mesh boundary) or by more than two: never moved.
+  void mark_boundary_vertices() {
+    std::vector<std::uint64_t> keys;
+    keys.reserve(3 * t_.size());
+    for (const Tri& t : t_)
+      for (int k = 0; k < 3; ++k) keys.push_back(edge_key(t[k], t[(k + 1) % 3]));
+    std::sort(keys.begin(), keys.end());
+    boundary_.assign(p_.size(), 0);
+    for (std::size_t i = 0; i < keys.size();) {
+      std::size_t j = i;
+      while (j < keys.size() && keys[j] == keys[i]) ++j;
+      if (j - i != 2) {
+        boundary_[keys[i] >> 32] = 1;
+        boundary_[keys[i] & 0xffffffffu] = 1;
+      }
+      i = j;
+    }
+  }
+
+  void build_incidence() {
+    inc_off_.assign(p_.size() + 1, 0);
+    for (std::size_t t = 0; t < t_.size(); ++t)
+      if (tri_alive_[t])
+        for (auto v : t_[t]) ++inc_off_[v + 1];
+    for (std::size_t v = 0; v < p_.size(); ++v) inc_off_[v + 1] += inc_off_[v];
+    inc_.resize(inc_off_.back());
+    std::vector<std::uint32_t> fill(inc_off_.begin(), inc_off_.end() - 1);
+    for (std::size_t t = 0; t < t_.size(); ++t)
+      if (tri_alive_[t])
+        for (auto v : t_[t]) inc_[fill[v]++] = static_cast<std::uint32_t>(t);
+  }
+
+  bool inside_box(const Vec3& q) const {
+    if (!has_box_) return true;
+    return q.x >= o_.box.lo.x && q.y >= o_.box.lo.y && q.z >= o_.box.lo.z &&
+           q.x <= o_.box.hi.x && q.y <= o_.box.hi.y && q.z <= o_.box.hi.z;
+  }
+
+  /// Distance from q to the iso-surface (Newton projection), or infinity when it does not
+  /// converge to within a tenth of the deviation bound.
+  double surface_distance(const Vec3& q, double max_step) const {
+    ProjectOptions po;
+    po.max_steps = 8;
+    po.tolerance = 1e-3 * o_.voxel;
+    po.max_step = max_step;
+    const ProjectResult r = project_to_iso(*field_, iso_, q, po);
+    if (r.residual > 0.1 * dev_) return std::numeric_limits<double>::infinity();
+    return distance(q, r.point);
+  }
+
+  /// Projects q onto the surface; false when the projection does not converge or leaves the box.
+  bool project(Vec3& q, double max_step) const {
+    if (!field_) return inside_box(q);
+    ProjectOptions po;
+    po.max_steps = 8;
+    po.tolerance = 1e-4 * o_.voxel;
+    po.max_step = max_step;
+    const ProjectResult r = project_to_iso(*field_, iso_, q, po);
+    if (r.residual > 1e-2 * o_.voxel) return false;
+    q = r.point;
+    return inside_box(q);
+  }
+
+  std::size_t flip_pass() {
+    struct Side {
+      std::uint64_t key;
+      std::uint32_t t;
+      std::uint8_t k;
+    };
+    std::vector<Side> sides;
+    sides.reserve(3 * t_.size());
+    for (std::size_t t = 0; t < t_.size(); ++t)
+      if (tri_alive_[t])
+        for (std::uint8_t k = 0; k < 3; ++k)
+          sides.push_back({edge_key(t_[t][k], t_[t][(k + 1) % 3]), static_cast<std::uint32_t>(t), k});
+    std::sort(sides.begin(), sides.end(), [](const Side& a, const Side& b) {
+      return a.key != b.key ? a.key < b.key : a.t < b.t;
+    });
+    std::vector<std::uint64_t> existing;
+    existing.reserve(sides.size() / 2 + 1);
+    for (const Side& s : sides)
+      if (existing.empty() || existing.back() != s.key) existing.push_back(s.key);
+    std::unordered_set<std::uint64_t> added;
+    std::vector<std::uint8_t> touched(t_.size(), 0);
+    const double target = o_.target_angle_deg * kDeg;
+    std::size_t flips = 0;
+    for (std::size_t i = 0; i + 1 < sides.size(); ++i) {
+      if (sides[i].key != sides[i + 1].key) continue;
+      if (i > 0 && sides[i - 1].key == sides[i].key) continue;
+      if (i + 2 < sides.size() && sides[i + 2].key == sides[i].key) continue;  // non-manifold
+      const std::uint32_t t1 = sides[i].t, t2 = sides[i + 1].t;
+      if (touched[t1] || touched[t2]) continue;
+      const std::uint8_t k1 = sides[i].k, k2 = sides[i + 1].k;
+      const std::uint32_t a = t_[t1][k1], b = t_[t1][(k1 + 1) % 3], x = t_[t1][(k1 + 2) % 3];
+      if (t_[t2][k2] != b || t_[t2][(k2 + 1) % 3] != a) continue;  // inconsistent orientation
+      const std::uint32_t y = t_[t2][(k2 + 2) % 3];
+      if (x == y) continue;
+      const Vec3 &pa = p_[a], &pb = p_[b], &px = p_[x], &py = p_[y];
+      const double old_min = std::min(min_angle(pa, pb, px), min_angle(pb, pa, py));
+      if (old_min >= target) continue;
+      const double new_min = std::min(min_angle(pa, py, px), min_angle(pb, px, py));
+      if (new_min < old_min + kDeg) continue;
+      const std::uint64_t kxy = edge_key(x, y);
+      if (std::binary_search(existing.begin(), existing.end(), kxy) || added.count(kxy)) continue;
+      const Vec3 old_n = normalized(tri_normal(pa, pb, px)) + normalized(tri_normal(pb, pa, py));
+      const Vec3 n1 = normalized(tri_normal(pa, py, px)), n2 = normalized(tri_normal(pb, px, py));
+      if (dot(n1, old_n) <= 0 || dot(n2, old_n) <= 0 || dot(n1, n2) <= 0) continue;
+      if (!flip_within_deviation(pa, pb, px, py)) continue;
+      t_[t1] = {a, y, x};
+      t_[t2] = {b, x, y};
+      touched[t1] = touched[t2] = 1;
+      added.insert(kxy);
+      ++flips;
+    }
+    return flips;
+  }
+
+  bool flip_within_deviation(const Vec3& pa, const Vec3& pb, const Vec3& px, const Vec3& py) const {
+    if (!field_) return segment_distance(pa, pb, px, py) <= dev_;
+    const double len = distance(px, py);
+    const double d_new = surface_distance(0.5 * (px + py), std::max(0.5 * len, o_.voxel));
+    if (d_new <= dev_) return true;
+    const double d_old = surface_distance(0.5 * (pa + pb), std::max(0.5 * distance(pa, pb), o_.voxel));
+    return d_new <= d_old;
+  }
+
+  /// Smallest angle over the alive triangles around v, with v at q (radians); sets `flipped`
+  /// when a triangle turns by more than ~70° against its normal at the current position.
+  double ring_min_angle(std::uint32_t v, const Vec3& q, bool& flipped) const {
+    double mn = std::numbers::pi;
+    flipped = false;
+    for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
+      const Tri& t = t_[inc_[i]];
+      Vec3 a = p_[t[0]], b = p_[t[1]], c = p_[t[2]];
+      const Vec3 n_old = normalized(tri_normal(a, b, c));
+      (t[0] == v ? a : t[1] == v ? b : c) = q;
+      const Vec3 n_new = normalized(tri_normal(a, b, c));
+      if (dot(n_old, n_new) < 0.35) flipped = true;
+      mn = std::min(mn, min_angle(a, b, c));
+    }
+    return mn;
+  }
+
+  std::size_t move_pass() {
+    build_incidence();
+    const double target = o_.target_angle_deg * kDeg;
+    std::size_t moves = 0;
+    for (std::uint32_t v = 0; v < p_.size(); ++v) {
+      if (fixed_[v] || boundary_[v] || inc_off_[v + 1] == inc_off_[v]) continue;
+      bool flipped = false;
+      const Vec3 pv = p_[v];
+      const double old_min = ring_min_angle(v, pv, flipped);
+      if (old_min >= target) continue;
+      Vec3 n{}, goal{};
+      double lmin = std::numeric_limits<double>::max();
+      const double w = 1.0 / (inc_off_[v + 1] - inc_off_[v]);
+      for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
+        const Tri& t = t_[inc_[i]];
+        const int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+        const Vec3 &p = p_[t[(k + 1) % 3]], &q = p_[t[(k + 2) % 3]];
+        const Vec3 nt = tri_normal(pv, p, q);
+        n += nt;
+        const Vec3 e = q - p;
+        const double le = norm(e);
+        lmin = std::min({lmin, le, distance(pv, p)});
+        // The apex of the equilateral triangle on pq, on v's side, in the triangle's plane
+        // (counter-clockwise p, q, apex: the in-plane normal of pq pointing left).
+        const Vec3 side = normalized(cross(normalized(nt), e));
+        goal += w * (0.5 * (p + q) + (std::sqrt(3.0) / 2) * le * (norm2(side) > 0 ? side : Vec3{}));
+      }
+      n = normalized(n);
+      if (norm2(n) == 0) continue;
+      for (double lambda : {1.0, 0.5, 0.25}) {
+        Vec3 q = pv + lambda * (goal - pv);
+        q -= dot(q - pv, n) * n;
+        if (!project(q, 0.5 * lmin)) continue;
+        if (distance(q, pv) > 0.75 * lmin + 1e-12) continue;
+        const double new_min = ring_min_angle(v, q, flipped);
+        if (flipped || new_min < old_min + 0.1 * kDeg) continue;
+        p_[v] = q;
+        ++moves;
+        break;
+      }
+    }
+    return moves;
+  }
+
+  /// A free vertex of `tri` with three triangles around it is removed and the three become one
+  /// (the triangle of its neighbours) when that one is better shaped, not turned over, and within
+  /// the deviation bound of the removed vertex.
+  bool remove_valence3(const Tri& tri, std::vector<std::uint8_t>& busy) {
+    for (std::uint32_t v : tri) {
+      if (fixed_[v] || boundary_[v] || inc_off_[v + 1] - inc_off_[v] != 3) continue;
+      // Ring a -> b -> c around v from its three triangles (v, a, b), (v, b, c), (v, c, a).
+      std::array<std::uint32_t, 3> next{}, from{};
+      for (int i = 0; i < 3; ++i) {
+        const Tri& u = t_[inc_[inc_off_[v] + i]];
+        const int k = u[0] == v ? 0 : u[1] == v ? 1 : 2;
+        from[i] = u[(k + 1) % 3];
+        next[i] = u[(k + 2) % 3];
+      }
+      const std::uint32_t a = from[0], b = next[0];
+      std::uint32_t c = UINT32_MAX;
+      for (int i = 0; i < 3; ++i)
+        if (from[i] == b) c = next[i];
+      if (c == UINT32_MAX || c == a || c == b) continue;
+      bool low = false;
+      for (auto u : {a, b, c}) low |= inc_off_[u + 1] - inc_off_[u] <= 3 || busy[u];
+      if (low) continue;
+      const Vec3 n = tri_normal(p_[a], p_[b], p_[c]);
+      double old_min = std::numbers::pi;
+      Vec3 old_n{};
+      for (int i = 0; i < 3; ++i) {
+        const Tri& u = t_[inc_[inc_off_[v] + i]];
+        old_min = std::min(old_min, tri_min_angle(u));
+        old_n += normalized(tri_normal(p_[u[0]], p_[u[1]], p_[u[2]]));
+      }
+      if (dot(normalized(n), normalized(old_n)) < 0.5) continue;
+      if (min_angle(p_[a], p_[b], p_[c]) <= old_min) continue;
+      const double height = std::abs(dot(p_[v] - p_[a], normalized(n)));
+      if (height > std::max(dev_, 0.25 * std::sqrt(norm(n)))) continue;
+      std::uint32_t keep = inc_[inc_off_[v]];
+      t_[keep] = {a, b, c};
+      tri_alive_[inc_[inc_off_[v] + 1]] = tri_alive_[inc_[inc_off_[v] + 2]] = 0;
+      busy[v] = busy[a] = busy[b] = busy[c] = 1;
+      return true;
+    }
+    return false;
+  }
+
+  std::size_t collapse_pass() {
+    build_incidence();
+    const double bad = o_.collapse_below_deg * kDeg;
+    std::vector<std::uint8_t> busy(p_.size(), 0);
+    std::vector<std::uint32_t> na, nb;
+    std::size_t collapses = 0;
+    auto neighbours = [&](std::uint32_t v, std::vector<std::uint32_t>& out) {
+      out.clear();
+      for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i)
+        for (auto u : t_[inc_[i]])
+          if (u != v) out.push_back(u);
+      std::sort(out.begin(), out.end());
+      out.erase(std::unique(out.begin(), out.end()), out.end());
+    };
+    for (std::size_t t = 0; t < t_.size(); ++t) {
+      if (!tri_alive_[t]) continue;
+      const Tri tri = t_[t];
+      if (busy[tri[0]] || busy[tri[1]] || busy[tri[2]]) continue;
+      if (tri_min_angle(tri) >= bad) continue;
+      if (remove_valence3(tri, busy)) {
+        ++collapses;
+        continue;
+      }
+      // Shortest edge (a, b) opposite c; a needle has it well under the other two.
+      std::array<double, 3> len{};
+      for (int k = 0; k < 3; ++k) len[k] = distance(p_[tri[k]], p_[tri[(k + 1) % 3]]);
+      int k = 0;
+      for (int j = 1; j < 3; ++j)
+        if (len[j] < len[k]) k = j;
+      const double next = std::min(len[(k + 1) % 3], len[(k + 2) % 3]);
+      if (!(len[k] < 0.5 * next)) continue;
+      std::uint32_t a = tri[k], b = tri[(k + 1) % 3];
+      if (boundary_[a] || boundary_[b] || (fixed_[a] && fixed_[b])) continue;
+      if (fixed_[b]) std::swap(a, b);  // keep the fixed end where it is
+      neighbours(a, na);
+      neighbours(b, nb);
+      std::vector<std::uint32_t> common;
+      std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
+      if (common.size() != 2) continue;  // link condition
+      bool low_valence = false;
+      for (auto c : common) {
+        std::uint32_t val = inc_off_[c + 1] - inc_off_[c];
+        low_valence |= val <= 3;
+      }
+      if (low_valence) continue;
+      Vec3 q = fixed_[a] ? p_[a] : 0.5 * (p_[a] + p_[b]);
+      if (!fixed_[a] && !project(q, 0.5 * next)) continue;
+      // The triangles around a and b, except the two on ab, with both ends at q.
+      double old_min = std::numbers::pi, new_min = std::numbers::pi;
+      bool ok = true;
+      for (auto v : {a, b}) {
+        for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1] && ok; ++i) {
+          const Tri& u = t_[inc_[i]];
+          old_min = std::min(old_min, tri_min_angle(u));
+          const bool has_a = u[0] == a || u[1] == a || u[2] == a;
+          const bool has_b = u[0] == b || u[1] == b || u[2] == b;
+          if (has_a && has_b) continue;
+          Vec3 c0 = p_[u[0]], c1 = p_[u[1]], c2 = p_[u[2]];
+          const Vec3 n_old = normalized(tri_normal(c0, c1, c2));
+          for (int j = 0; j < 3; ++j)
+            if (u[j] == a || u[j] == b) (j == 0 ? c0 : j == 1 ? c1 : c2) = q;
+          if (dot(n_old, normalized(tri_normal(c0, c1, c2))) < 0.35) ok = false;
+          new_min = std::min(new_min, min_angle(c0, c1, c2));
+        }
+      }
+      if (!ok || new_min <= old_min) continue;
+      p_[a] = q;
+      for (std::uint32_t i = inc_off_[b]; i < inc_off_[b + 1]; ++i) {
+        Tri& u = t_[inc_[i]];
+        const bool has_a = u[0] == a || u[1] == a || u[2] == a;
+        if (has_a) {
+          tri_alive_[inc_[i]] = 0;
+          continue;
+        }
+        for (auto& w : u)
+          if (w == b) w = a;
+      }
+      for (auto v : na) busy[v] = 1;
+      for (auto v : nb) busy[v] = 1;
+      busy[a] = busy[b] = 1;
+      ++collapses;
+    }
+    return collapses;
+  }
+};
+
+}  // namespace
+
+ImproveStats improve_mesh(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
+                          const ScalarField* field, double iso, const ImproveOptions& options,
+                          std::vector<std::uint32_t>* vertex_map) {
+  if (mesh.num_triangles() == 0) return {};
+  Improver imp(mesh, fixed, field, iso, options);
+  const ImproveStats st = imp.run();
+  imp.write(mesh, st.collapses > 0, vertex_map);
+  mesh.normals.clear();
+  return st;
+}
+
+ImproveStats improve_base_mesh(BaseMesh& base, const ScalarField* field, double iso,
+                               const ImproveOptions& options) {
+  std::vector<std::uint32_t> map;
+  const ImproveStats st = improve_mesh(base.mesh, base.border, field, iso, options, &map);
+  auto remap = [&](auto& per_vertex) {
+    std::remove_reference_t<decltype(per_vertex)> out(base.mesh.num_vertices());
+    for (std::size_t v = 0; v < map.size() && v < per_vertex.size(); ++v)
+      if (map[v] != UINT32_MAX) out[map[v]] = per_vertex[v];
+    per_vertex = std::move(out);
+  };
+  remap(base.anchor);
+  remap(base.border);
+  remap(base.component);
+  return st;
+}
+
+}  // namespace adamesh
