@@ -143,6 +143,9 @@ std::vector<OptionSpec> input_option_specs() {
       {"--res", true, "implicit input: samples along the longest side (default 64)"},
       {"--nan-value", true, "replace NaN/Inf samples by this value (default: reject them)"},
       {"--flip", false, "swap inside and outside"},
+      {"--label", true,
+       "label maps: the boundary of the voxels with this value (iso 0.5 of their 0/1 mask; "
+       "`adamesh info` lists the labels)"},
   };
 }
 
@@ -184,6 +187,7 @@ InputOptions input_options_from(const Args& args) {
   }
   o.nan_value = args.get_double("--nan-value");
   o.flip_inside = args.has("--flip");
+  o.label = args.get_int("--label");
   return o;
 }
 

@@ -44,7 +44,8 @@ std::string nonfinite_text(const Input& in, const InputOptions& o) {
   return t;
 }
 
-nlohmann::ordered_json to_json(const Input& in, const VolumeStats& s) {
+nlohmann::ordered_json to_json(const Input& in, const VolumeStats& s,
+                               const std::vector<LabelCount>& labels) {
   const Volume& v = *in.volume;
   const Grid& g = v.grid;
   nlohmann::ordered_json j;
@@ -64,7 +65,14 @@ nlohmann::ordered_json to_json(const Input& in, const VolumeStats& s) {
     p[percentile_key(VolumeStats::kPercentileLevels[q])] = num(s.percentiles[q]);
   j["percentiles"] = p;
   j["percentile_error"] = num(s.percentile_error);
-  j["suggested_iso"] = num(s.otsu);
+  // A label map has no iso-value to suggest: its surfaces are the labels' boundaries.
+  j["suggested_iso"] = labels.empty() ? num(s.otsu) : nlohmann::ordered_json(nullptr);
+  j["label_map"] = !labels.empty();
+  if (!labels.empty()) {
+    nlohmann::ordered_json l = nlohmann::ordered_json::array();
+    for (const auto& c : labels) l.push_back({{"label", c.label}, {"voxels", c.voxels}});
+    j["labels"] = l;
+  }
   j["default_iso"] = in.default_iso ? num(*in.default_iso) : nlohmann::ordered_json(nullptr);
   j["nonfinite"] = in.nonfinite_samples;
   j["inside"] = inside_rule(in);
@@ -72,7 +80,8 @@ nlohmann::ordered_json to_json(const Input& in, const VolumeStats& s) {
   return j;
 }
 
-void print_text(const Input& in, const InputOptions& o, const VolumeStats& s) {
+void print_text(const Input& in, const InputOptions& o, const VolumeStats& s,
+                const std::vector<LabelCount>& labels) {
   const Volume& v = *in.volume;
   const Grid& g = v.grid;
   auto line = [](const char* key, const std::string& value) {
@@ -102,7 +111,20 @@ void print_text(const Input& in, const InputOptions& o, const VolumeStats& s) {
   if (s.percentile_error > 0) p += "  (± " + fmt(s.percentile_error) + ")";
   line("percentiles", p);
   line("NaN/Inf", nonfinite_text(in, o));
-  line("suggested iso", fmt(s.otsu) + " (Otsu)");
+  if (labels.empty()) {
+    line("suggested iso", fmt(s.otsu) + " (Otsu)");
+  } else {
+    line("label map", std::to_string(labels.size()) +
+                          " labels (integer values); mesh one with `extract --label L`, all with "
+                          "`extract --labels all -o DIR/`");
+    for (const auto& c : labels) {
+      std::ostringstream t;
+      t << std::setw(8) << c.label << "  " << std::setw(12) << c.voxels << " voxels  ("
+        << std::fixed << std::setprecision(3)
+        << 100.0 * static_cast<double>(c.voxels) / static_cast<double>(g.num_samples()) << " %)";
+      line("", t.str());
+    }
+  }
   if (in.default_iso) line("default iso", fmt(*in.default_iso));
   line("inside", inside_rule(in) + (in.inside_sign > 0 ? " (bright is inside)" : " (negative is inside)"));
 }
@@ -126,10 +148,11 @@ int cmd_info(const Argv& argv) {
   options.keep_nonfinite = true;
   const Input in = load_input(args.positionals()[0], options);
   const VolumeStats s = compute_stats(*in.volume);
+  const std::vector<LabelCount> labels = label_counts(*in.volume);
   if (args.has("--json"))
-    std::cout << to_json(in, s).dump(2) << "\n";
+    std::cout << to_json(in, s, labels).dump(2) << "\n";
   else
-    print_text(in, options, s);
+    print_text(in, options, s, labels);
   return 0;
 }
 

@@ -107,12 +107,21 @@ RefineStage run_refine_stage(const Args& args, const Input& in, double iso, cons
   progress.finish();
   out.refine_s = clock.lap();
 
+  // Uniform levels are written as the hierarchy has them (semi-regular, nested); adaptive meshes
+  // get the shape improvement, keeping their triangle count and error bound (docs/QUALITY.md).
   ImproveStats imp;
-  if (!args.has("--no-improve")) {
+  if (!args.has("--no-improve") && ro.mode != RefineMode::uniform) {
     progress.stage("improve");
     ImproveOptions io;
     io.voxel = h;
     io.box = in.field->domain();
+    io.target_triangles = cut.mesh.num_triangles();
+    // An explicit --max-error is a bound the improvement keeps; the default's cap at marching
+    // cubes' count already gives up the bound where it binds.
+    if (ro.mode == RefineMode::max_error && ro.max_triangles == 0) {
+      io.max_deviation = std::min(ro.max_error, 0.25 * h);
+      io.max_error = ro.max_error;
+    }
     imp = improve_mesh(cut.mesh, cut.vertex_border, in.field.get(), iso, io);
     progress.finish();
     out.improve_s = clock.lap();
@@ -148,7 +157,8 @@ RefineStage run_refine_stage(const Args& args, const Input& in, double iso, cons
                               {"border", st.border_placements},
                               {"unconverged", st.unconverged_projections}}},
               {"improve", {{"flips", imp.flips}, {"moves", imp.moves},
-                           {"collapses", imp.collapses}, {"rounds", imp.rounds},
+                           {"collapses", imp.collapses}, {"splits", imp.splits},
+                           {"rounds", imp.rounds},
                            {"min_angle_before", imp.min_angle_before_deg},
                            {"min_angle_after", imp.min_angle_after_deg},
                            {"pct_below_20_before", imp.pct_below_20_before},

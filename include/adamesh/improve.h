@@ -42,12 +42,18 @@ struct ImproveOptions {
   /// triangle's shortest edge and flips and moves could not fix it. 0 = no collapses (the
   /// triangle count stays the same).
   double collapse_below_deg = 12;
+  /// After the rounds, split edges (farthest from the surface first) until the mesh has this many
+  /// triangles again, or one less: collapses do not eat a triangle budget. 0 = no splits.
+  std::size_t target_triangles = 0;
+  /// With a field: an error bound (world units) no changed triangle may exceed — at seven sampled
+  /// points, with the refinement's 1.25 margin — unless it was already above. 0 = none.
+  double max_error = 0;
   /// The box vertices must stay in (the volume's world box); empty (lo == hi) = no box.
   Box box;
 };
 
 struct ImproveStats {
-  std::size_t flips = 0, moves = 0, collapses = 0;
+  std::size_t flips = 0, moves = 0, collapses = 0, splits = 0;
   int rounds = 0;
   double min_angle_before_deg = 0, min_angle_after_deg = 0;
   double pct_below_20_before = 0, pct_below_20_after = 0;

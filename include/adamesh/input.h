@@ -30,6 +30,8 @@ struct InputOptions {
   std::optional<double> nan_value;   ///< replace NaN/Inf samples by this value instead of failing
   bool flip_inside = false;          ///< swap inside and outside
   bool keep_nonfinite = false;       ///< `info`: count NaN/Inf samples instead of failing
+  /// Label maps: the input becomes the 0/1 mask of the voxels with this value (label_input()).
+  std::optional<std::int64_t> label;
 };
 
 struct Input {
@@ -50,6 +52,22 @@ struct Input {
 /// domain() is the grid's world box. NaN/Inf samples: see docs/CONVENTIONS.md.
 /// Throws Error with a one-line message naming the input and the problem.
 Input load_input(const std::string& spec, const InputOptions& options = {});
+
+/// One value of a label map and how many voxels have it.
+struct LabelCount {
+  std::int64_t label = 0;
+  std::int64_t voxels = 0;
+};
+
+/// Label maps: for an integer volume with 2..max_labels distinct values, every value with its
+/// voxel count (increasing values); empty for floating volumes and volumes with more values
+/// (intensities). One pass over the samples.
+std::vector<LabelCount> label_counts(const Volume& volume, std::size_t max_labels = 64);
+
+/// The boundary of one label as an input: a 0/1 uint8 mask of the voxels equal to `label` on the
+/// same grid, inside where 1, default iso-value 1/2. Throws Error(invalid_input) for a floating
+/// volume or a label no voxel has.
+Input label_input(const Input& in, std::int64_t label);
 
 /// Names of the built-in shapes (`shape:NAME`).
 std::vector<std::string> shape_names();

@@ -120,6 +120,7 @@ Input load_input(const std::string& spec, const InputOptions& options) {
   in.nonfinite_samples = handle_nonfinite(v, spec, options);
   in.volume = std::make_shared<const Volume>(std::move(v));
   if (!in.field) in.field = make_volume_field(in.volume);
+  if (options.label) in = label_input(in, *options.label);
   if (options.flip_inside) in.inside_sign = -in.inside_sign;
   return in;
 }

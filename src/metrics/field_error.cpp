@@ -7,7 +7,8 @@
 //             outward field normal −inside_sign·∇f/|∇f| at the centroid.
 // A projection that does not converge, or that ends more than 4× the first-order distance away,
 // is replaced by the nearest surface crossing on short lines through the point (along the
-// triangle normal and the gradient), else by |signed_distance|, and counted in `unconverged`.
+// triangle or vertex normal, the gradient and the three axes; farther when none crosses), else by
+// |signed_distance|, and counted in `unconverged`.
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
@@ -138,8 +139,20 @@ FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double 
       if (!std::isfinite(f0)) return cap;
       const double R = std::max(kSearch * po.max_step, std::min(2 * sd, cap));
       double best = pr.converged ? d : std::numeric_limits<double>::infinity();
-      best = std::min(best, line_crossing(p, normal, f0, R));
-      if (gl > 0 && std::isfinite(gl)) best = std::min(best, line_crossing(p, g / gl, f0, R));
+      // Lines along the normal, the gradient and the three axes (a flat field — label masks,
+      // saturated data — has no gradient a voxel away from the surface, and a crossing found on
+      // one line can be much farther than the nearest point), then the same four times farther.
+      const double R2 = std::min(std::max(4 * R, 16 * po.max_step), cap);
+      for (const double radius : {R, R2}) {
+        best = std::min(best, line_crossing(p, normal, f0, radius));
+        if (gl > 0 && std::isfinite(gl)) best = std::min(best, line_crossing(p, g / gl, f0, radius));
+        for (int k = 0; k < 3; ++k) {
+          Vec3 e{};
+          e[k] = 1;
+          best = std::min(best, line_crossing(p, e, f0, radius));
+        }
+        if (std::isfinite(best)) break;
+      }
       return std::isfinite(best) ? best : sd;
     };
 
@@ -159,10 +172,16 @@ FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double 
           d[g] = dist(detail::sample_point(mesh, t, g), normal_of(t));
     });
     const std::vector<std::uint32_t> verts = detail::referenced_vertices(mesh);
+    std::vector<Vec3> vnormal(mesh.num_vertices());
+    for (std::size_t t = 0; t < nt; ++t) {
+      const Vec3 a = mesh.vertex(tri[3 * t]);
+      const Vec3 nrm = cross(mesh.vertex(tri[3 * t + 1]) - a, mesh.vertex(tri[3 * t + 2]) - a);
+      for (int k = 0; k < 3; ++k) vnormal[tri[3 * t + k]] += nrm;
+    }
     const double vmax = tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, verts.size(), 1024), 0.0,
         [&](const auto& rg, double m) {
-          for (std::size_t i = rg.begin(); i != rg.end(); ++i) m = std::max(m, dist(mesh.vertex(verts[i]), Vec3{}));
+          for (std::size_t i = rg.begin(); i != rg.end(); ++i) m = std::max(m, dist(mesh.vertex(verts[i]), normalized(vnormal[verts[i]])));
           return m;
         },
         [](double a, double b) { return std::max(a, b); });

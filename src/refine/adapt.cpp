@@ -29,6 +29,7 @@
 //      the c-vertex nearest the final position.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "refine_internal.h"
@@ -391,6 +392,9 @@ Surface::Surface(const SurfelComplex& sc_, const ConnectivityGraph& g_, const Sc
                  const RefineOptions& options)
     : sc(sc_), g(g_), field(field_), iso(sc_.iso), h(sc_.grid.min_spacing()), tau(options.tau),
       geodesic_min_edge(options.geodesic_min_edge * sc_.grid.min_spacing()),
+      guard_distance(options.mode == RefineMode::max_error && options.max_triangles == 0
+                         ? options.max_error / 1.25
+                         : std::numeric_limits<double>::infinity()),
       border_graph(build_border_graph(sc_, g_)) {}
 
 Placed place_vertex(const Surface& s, const EdgeInput& in, PathWorkspace& ws) {
@@ -468,11 +472,13 @@ Placed place_vertex(const Surface& s, const EdgeInput& in, PathWorkspace& ws) {
   // Noise guard (docs/QUALITY.md): on sampled fields a projection that travels farther than a
   // quarter of the edge follows a voxel-scale bump and lands next to another vertex (CT head:
   // clusters of three vertices within 0.01 mm, surrounded by needles no flip or collapse can
-  // remove). The point before the projection is then kept when its triangles are better shaped.
+  // remove). The point before the projection is then kept when its triangles are better shaped
+  // and it lies within `guard_distance` of the surface (an explicit error bound caps it).
   if (in.ring_size == 4 && !s.field.is_analytic() && out.kind != PlacementKind::normal_line &&
       distance(out.position, p) > 0.25 * elen) {
     const Vec3 n = ring_normal(in, p);
-    if (ring_quality(in, p, n) > ring_quality(in, out.position, n)) {
+    if (ring_quality(in, p, n) > ring_quality(in, out.position, n) &&
+        std::abs(signed_distance(s.field, s.iso, p)) <= s.guard_distance) {
       out.position = p;
       out.converged = false;
     }

@@ -23,6 +23,9 @@ struct Surface {
   double h = 1;                  ///< smallest voxel edge
   double tau = 0.3;
   double geodesic_min_edge = 0;  ///< world units: shorter edges use the Euclidean midpoint
+  /// Noise guard: an unprojected fallback point may stay this far from the surface (world units;
+  /// the error bound of an explicit max_error refinement, else unbounded).
+  double guard_distance = 0;
   /// Border curve graph: border surfels adjacent when they share a border node (an endpoint of
   /// their border segments). Same vertex numbering as g; other surfels have no edges.
   ConnectivityGraph border_graph;

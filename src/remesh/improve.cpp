@@ -31,6 +31,9 @@ namespace {
 
 using Tri = std::array<std::uint32_t, 3>;
 constexpr double kDeg = std::numbers::pi / 180;
+/// The refinement's bound on a triangle is 1.25 × its sampled error (its samples can miss the
+/// worst point); the same margin here.
+constexpr double kErrorSafety = 1.25;
 
 double angle_at(const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 u = b - a, v = c - a;
@@ -110,7 +113,9 @@ class Improver {
       st.rounds = r + 1;
       if (f + m + c == 0) break;
     }
-    // A last flip pass: the final moves can leave flippable pairs.
+    // Splits give back the triangles collapses took (the budget holds), then a last flip pass:
+    // the final moves and splits can leave flippable pairs.
+    if (o_.target_triangles > 0) st.splits = split_pass(o_.target_triangles);
     st.flips += flip_pass();
     measure(st.min_angle_after_deg, st.pct_below_20_after);
     return st;
@@ -157,6 +162,32 @@ class Improver {
   std::vector<Tri> t_;
   std::vector<std::uint8_t> fixed_, boundary_, tri_alive_;
   std::vector<std::uint32_t> inc_off_, inc_;  // vertex -> alive triangles (CSR)
+
+  /// Largest |distance| estimate at seven points of triangle abc (centroid, edge midpoints, and
+  /// the points halfway from the centroid to the corners); 0 without a field or error bound.
+  double tri_error(const Vec3& a, const Vec3& b, const Vec3& c) const {
+    if (!field_ || o_.max_error <= 0) return 0;
+    const Vec3 g = (a + b + c) / 3.0;
+    double e = 0;
+    for (const Vec3& q : {g, 0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a), 0.5 * (g + a),
+                          0.5 * (g + b), 0.5 * (g + c)})
+      e = std::max(e, std::abs(signed_distance(*field_, iso_, q, 1e30)));
+    return e;
+  }
+
+  /// The triangles around v with v at q stay within the error bound (or no worse than now).
+  bool ring_error_ok(std::uint32_t v, const Vec3& q) const {
+    if (!field_ || o_.max_error <= 0) return true;
+    const double bound = o_.max_error / kErrorSafety;
+    for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
+      const Tri& t = t_[inc_[i]];
+      Vec3 a = p_[t[0]], b = p_[t[1]], c = p_[t[2]];
+      const double before = tri_error(a, b, c);
+      (t[0] == v ? a : t[1] == v ? b : c) = q;
+      if (tri_error(a, b, c) > std::max(bound, before)) return false;
+    }
+    return true;
+  }
 
   double tri_min_angle(const Tri& t) const { return min_angle(p_[t[0]], p_[t[1]], p_[t[2]]); }
 
@@ -237,7 +268,81 @@ class Improver {
     return inside_box(q);
   }
 
-  std::size_t flip_pass() {
+  std::size_t alive_triangles() const {
+    return static_cast<std::size_t>(std::count(tri_alive_.begin(), tri_alive_.end(), 1));
+  }
+
+  /// Splits interior edges at their midpoint projected onto the surface until the mesh has
+  /// `target` − 1 or `target` triangles: the edges that stand farthest from the surface
+  /// (midpoint distance × length) first, at most one split per triangle a pass.
+  std::size_t split_pass(std::size_t target) {
+    std::size_t splits = 0;
+    for (int pass = 0; pass < 8; ++pass) {
+      const std::size_t have = alive_triangles();
+      if (have + 1 >= target) break;
+      std::size_t need = (target - have) / 2;
+      struct Cand {
+        double key;
+        std::uint32_t t1, t2;
+        std::uint8_t k1, k2;
+      };
+      std::vector<Cand> cands;
+      for_each_interior_edge([&](std::uint32_t t1, std::uint8_t k1, std::uint32_t t2, std::uint8_t k2) {
+        const Vec3& a = p_[t_[t1][k1]];
+        const Vec3& b = p_[t_[t1][(k1 + 1) % 3]];
+        const double len = distance(a, b);
+        double d = 0;
+        if (field_) d = std::abs(signed_distance(*field_, iso_, 0.5 * (a + b), len));
+        cands.push_back({(d + 1e-3 * o_.voxel) * len * len, t1, t2, k1, k2});
+      });
+      std::stable_sort(cands.begin(), cands.end(),
+                       [](const Cand& x, const Cand& y) { return x.key > y.key; });
+      std::vector<std::uint8_t> touched(t_.size(), 0);
+      std::size_t done = 0;
+      for (const Cand& c : cands) {
+        if (done == need) break;
+        if (touched[c.t1] || touched[c.t2]) continue;
+        if (split_edge(c.t1, c.k1, c.t2, c.k2)) {
+          touched[c.t1] = touched[c.t2] = 1;
+          ++done;
+        }
+      }
+      splits += done;
+      if (done == 0) break;
+    }
+    return splits;
+  }
+
+  bool split_edge(std::uint32_t t1, std::uint8_t k1, std::uint32_t t2, std::uint8_t k2) {
+    const std::uint32_t a = t_[t1][k1], b = t_[t1][(k1 + 1) % 3], x = t_[t1][(k1 + 2) % 3];
+    const std::uint32_t y = t_[t2][(k2 + 2) % 3];
+    Vec3 m = 0.5 * (p_[a] + p_[b]);
+    Vec3 q = m;
+    if (project(q, 0.25 * distance(p_[a], p_[b])) && distance(q, m) < 0.25 * distance(p_[a], p_[b]))
+      m = q;
+    if (has_box_ && !inside_box(m)) return false;
+    const Vec3 n1 = tri_normal(p_[a], p_[b], p_[x]), n2 = tri_normal(p_[b], p_[a], p_[y]);
+    const std::array<std::array<Vec3, 3>, 4> kids{{{p_[a], m, p_[x]}, {m, p_[b], p_[x]},
+                                                   {p_[b], m, p_[y]}, {m, p_[a], p_[y]}}};
+    for (int i = 0; i < 4; ++i)
+      if (dot(tri_normal(kids[i][0], kids[i][1], kids[i][2]), i < 2 ? n1 : n2) <= 0) return false;
+    const auto mv = static_cast<std::uint32_t>(p_.size());
+    p_.push_back(m);
+    fixed_.push_back(0);
+    boundary_.push_back(0);
+    t_[t1] = {a, mv, x};
+    t_[t2] = {b, mv, y};
+    t_.push_back({mv, b, x});
+    t_.push_back({mv, a, y});
+    tri_alive_.push_back(1);
+    tri_alive_.push_back(1);
+    return true;
+  }
+
+  /// f(t1, k1, t2, k2) for every manifold, consistently oriented interior edge: side k1 of t1
+  /// runs a -> b, side k2 of t2 runs b -> a. Edges in key order.
+  template <class F>
+  void for_each_interior_edge(F&& f) const {
     struct Side {
       std::uint64_t key;
       std::uint32_t t;
@@ -252,42 +357,56 @@ class Improver {
     std::sort(sides.begin(), sides.end(), [](const Side& a, const Side& b) {
       return a.key != b.key ? a.key < b.key : a.t < b.t;
     });
+    for (std::size_t i = 0; i + 1 < sides.size(); ++i) {
+      if (sides[i].key != sides[i + 1].key) continue;
+      if (i > 0 && sides[i - 1].key == sides[i].key) continue;
+      if (i + 2 < sides.size() && sides[i + 2].key == sides[i].key) continue;
+      const Side &s1 = sides[i], &s2 = sides[i + 1];
+      if (t_[s2.t][s2.k] != t_[s1.t][(s1.k + 1) % 3] || t_[s2.t][(s2.k + 1) % 3] != t_[s1.t][s1.k])
+        continue;
+      f(s1.t, s1.k, s2.t, s2.k);
+    }
+  }
+
+  std::size_t flip_pass() {
     std::vector<std::uint64_t> existing;
-    existing.reserve(sides.size() / 2 + 1);
-    for (const Side& s : sides)
-      if (existing.empty() || existing.back() != s.key) existing.push_back(s.key);
+    existing.reserve(3 * t_.size());
+    for (std::size_t t = 0; t < t_.size(); ++t)
+      if (tri_alive_[t])
+        for (int k = 0; k < 3; ++k) existing.push_back(edge_key(t_[t][k], t_[t][(k + 1) % 3]));
+    std::sort(existing.begin(), existing.end());
+    existing.erase(std::unique(existing.begin(), existing.end()), existing.end());
     std::unordered_set<std::uint64_t> added;
     std::vector<std::uint8_t> touched(t_.size(), 0);
     const double target = o_.target_angle_deg * kDeg;
     std::size_t flips = 0;
-    for (std::size_t i = 0; i + 1 < sides.size(); ++i) {
-      if (sides[i].key != sides[i + 1].key) continue;
-      if (i > 0 && sides[i - 1].key == sides[i].key) continue;
-      if (i + 2 < sides.size() && sides[i + 2].key == sides[i].key) continue;  // non-manifold
-      const std::uint32_t t1 = sides[i].t, t2 = sides[i + 1].t;
-      if (touched[t1] || touched[t2]) continue;
-      const std::uint8_t k1 = sides[i].k, k2 = sides[i + 1].k;
+    for_each_interior_edge([&](std::uint32_t t1, std::uint8_t k1, std::uint32_t t2, std::uint8_t k2) {
+      if (touched[t1] || touched[t2]) return;
       const std::uint32_t a = t_[t1][k1], b = t_[t1][(k1 + 1) % 3], x = t_[t1][(k1 + 2) % 3];
-      if (t_[t2][k2] != b || t_[t2][(k2 + 1) % 3] != a) continue;  // inconsistent orientation
       const std::uint32_t y = t_[t2][(k2 + 2) % 3];
-      if (x == y) continue;
+      if (x == y) return;
       const Vec3 &pa = p_[a], &pb = p_[b], &px = p_[x], &py = p_[y];
       const double old_min = std::min(min_angle(pa, pb, px), min_angle(pb, pa, py));
-      if (old_min >= target) continue;
+      if (old_min >= target) return;
       const double new_min = std::min(min_angle(pa, py, px), min_angle(pb, px, py));
-      if (new_min < old_min + kDeg) continue;
+      if (new_min < old_min + kDeg) return;
       const std::uint64_t kxy = edge_key(x, y);
-      if (std::binary_search(existing.begin(), existing.end(), kxy) || added.count(kxy)) continue;
+      if (std::binary_search(existing.begin(), existing.end(), kxy) || added.count(kxy)) return;
       const Vec3 old_n = normalized(tri_normal(pa, pb, px)) + normalized(tri_normal(pb, pa, py));
       const Vec3 n1 = normalized(tri_normal(pa, py, px)), n2 = normalized(tri_normal(pb, px, py));
-      if (dot(n1, old_n) <= 0 || dot(n2, old_n) <= 0 || dot(n1, n2) <= 0) continue;
-      if (!flip_within_deviation(pa, pb, px, py)) continue;
+      if (dot(n1, old_n) <= 0 || dot(n2, old_n) <= 0 || dot(n1, n2) <= 0) return;
+      if (!flip_within_deviation(pa, pb, px, py)) return;
+      if (o_.max_error > 0 && field_) {
+        const double before = std::max(tri_error(pa, pb, px), tri_error(pb, pa, py));
+        const double after = std::max(tri_error(pa, py, px), tri_error(pb, px, py));
+        if (after > std::max(o_.max_error / kErrorSafety, before)) return;
+      }
       t_[t1] = {a, y, x};
       t_[t2] = {b, x, y};
       touched[t1] = touched[t2] = 1;
       added.insert(kxy);
       ++flips;
-    }
+    });
     return flips;
   }
 
@@ -353,6 +472,7 @@ class Improver {
         if (distance(q, pv) > 0.75 * lmin + 1e-12) continue;
         const double new_min = ring_min_angle(v, q, flipped);
         if (flipped || new_min < old_min + 0.1 * kDeg) continue;
+        if (!ring_error_ok(v, q)) continue;
         p_[v] = q;
         ++moves;
         break;
@@ -393,6 +513,7 @@ class Improver {
       }
       if (dot(normalized(n), normalized(old_n)) < 0.5) continue;
       if (min_angle(p_[a], p_[b], p_[c]) <= old_min) continue;
+      if (o_.max_error > 0 && tri_error(p_[a], p_[b], p_[c]) > o_.max_error / kErrorSafety) continue;
       const double height = std::abs(dot(p_[v] - p_[a], normalized(n)));
       if (height > std::max(dev_, 0.25 * std::sqrt(norm(n)))) continue;
       std::uint32_t keep = inc_[inc_off_[v]];
@@ -470,6 +591,7 @@ class Improver {
         }
       }
       if (!ok || new_min <= old_min) continue;
+      if (!ring_error_ok(a, q) || !ring_error_ok(b, q)) continue;
       p_[a] = q;
       for (std::uint32_t i = inc_off_[b]; i < inc_off_[b + 1]; ++i) {
         Tri& u = t_[inc_[i]];
