@@ -3,6 +3,7 @@
 #include <malloc.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -56,6 +57,40 @@ nlohmann::json topology_json(const TopologyReport& t) {
           {"euler", t.euler},                 {"components", t.components},
           {"boundary_loops", t.boundary_loops}, {"nonmanifold_edges", t.nonmanifold_edges},
           {"oriented", t.oriented}};
+}
+
+/// "the base mesh needs at least M triangles for its K components (...): --min-component S
+/// reaches N" — which components keep a budget N out of reach, and the smallest surfel count
+/// whose --min-component would bring it in.
+std::string unreachable_budget_note(const BaseMesh& base, const ConnectivityGraph& g, std::size_t n) {
+  std::vector<std::size_t> surfels(g.num_components, 0), tris(g.num_components, 0);
+  for (std::size_t v = 0; v < g.num_vertices(); ++v) ++surfels[g.component[v]];
+  for (std::size_t t = 0; t < base.mesh.num_triangles(); ++t)
+    ++tris[base.component[base.mesh.triangles[3 * t]]];
+  std::vector<std::uint32_t> comps;
+  for (std::uint32_t c = 0; c < g.num_components; ++c)
+    if (tris[c] > 0) comps.push_back(c);
+  std::sort(comps.begin(), comps.end(), [&](auto a, auto b) { return surfels[a] < surfels[b]; });
+  std::ostringstream s;
+  s << "--triangles " << n << " is out of reach: the " << comps.size()
+    << " surface components need at least " << base.mesh.num_triangles()
+    << " triangles with this topology (the output has that many and more)";
+  // Drop the smallest components until the rest fits.
+  std::size_t total = base.mesh.num_triangles(), dropped = 0, i = 0;
+  while (i < comps.size() && total > n) {
+    const std::size_t size = surfels[comps[i]];
+    while (i < comps.size() && surfels[comps[i]] == size) {
+      total -= tris[comps[i]];
+      ++dropped;
+      ++i;
+    }
+  }
+  if (total <= n && i < comps.size())
+    s << "; " << dropped << " of them have fewer than " << surfels[comps[i]]
+      << " surfels: --min-component " << surfels[comps[i]] << " reaches it";
+  else
+    s << "; larger --rmax gives a coarser base mesh";
+  return s.str();
 }
 
 }  // namespace
@@ -185,10 +220,20 @@ int cmd_extract(const Argv& argv) {
     ImproveOptions io;
     io.voxel = sc.grid.min_spacing();
     io.box = in.field->domain();
-    base_improve = improve_base_mesh(base, in.field.get(), iso, io);
+    // A triangle budget below M0's size: decimate M0 first so that the refinement has room.
+    std::size_t decimate_to = 0;
+    if (auto n = args.get_int("--triangles"); n && *n > 0 &&
+        base.mesh.num_triangles() > static_cast<std::size_t>(*n) / 2)
+      decimate_to = std::max<std::size_t>(static_cast<std::size_t>(*n) / 4, 1);
+    base_improve = improve_base_mesh(base, in.field.get(), iso, io, decimate_to);
     progress.finish();
     timings["improve_base"] = clock.lap();
   }
+
+  // A budget the topology cannot reach: say so, and what would reach it.
+  if (auto n = args.get_int("--triangles"); n && *n > 0 &&
+      base.mesh.num_triangles() > static_cast<std::size_t>(*n))
+    base.stats.warnings.push_back(unreachable_budget_note(base, g, static_cast<std::size_t>(*n)));
 
   progress.stage("write");
   if (auto path = args.get("--base")) {
@@ -236,6 +281,7 @@ int cmd_extract(const Argv& argv) {
     r["base"] = topology_json(topo);
     r["base"]["quality"] = {{"q_mean", quality(base.mesh).q_mean}};
     r["base"]["improve"] = {{"flips", base_improve.flips},
+                            {"decimation_collapses", base_improve.decimated},
                             {"moves", base_improve.moves},
                             {"collapses", base_improve.collapses},
                             {"pct_below_20_before", base_improve.pct_below_20_before},

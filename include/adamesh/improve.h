@@ -54,6 +54,7 @@ struct ImproveOptions {
 
 struct ImproveStats {
   std::size_t flips = 0, moves = 0, collapses = 0, splits = 0;
+  std::size_t decimated = 0;  ///< improve_base_mesh: collapses made to reach `decimate_to`
   int rounds = 0;
   double min_angle_before_deg = 0, min_angle_after_deg = 0;
   double pct_below_20_before = 0, pct_below_20_after = 0;
@@ -74,7 +75,10 @@ ImproveStats improve_mesh(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
 /// are built): border vertices stay, the per-vertex anchor/border/component arrays follow the
 /// renumbering. Moves are small (under ¾ of the shortest incident edge), so anchors stay valid
 /// starting points for the refinement's graph searches.
+/// `decimate_to` > 0: first collapse the shortest edges (link condition, no new triangle below
+/// 15°, flips between passes) until M0 has at most that many triangles or no edge can go — the smallest base a triangle
+/// budget below M0's size needs.
 ImproveStats improve_base_mesh(BaseMesh& base, const ScalarField* field, double iso,
-                               const ImproveOptions& options = {});
+                               const ImproveOptions& options = {}, std::size_t decimate_to = 0);
 
 }  // namespace adamesh

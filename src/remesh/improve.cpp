@@ -34,6 +34,8 @@ constexpr double kDeg = std::numbers::pi / 180;
 /// The refinement's bound on a triangle is 1.25 × its sampled error (its samples can miss the
 /// worst point); the same margin here.
 constexpr double kErrorSafety = 1.25;
+/// Decimation makes no triangle with a smaller angle than this (degrees) unless one was there.
+constexpr double kDecimateMinAngle = 15;
 
 double angle_at(const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 u = b - a, v = c - a;
@@ -525,20 +527,73 @@ class Improver {
     return false;
   }
 
+  void neighbours(std::uint32_t v, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i)
+      for (auto u : t_[inc_[i]])
+        if (u != v) out.push_back(u);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  }
+
+  /// Collapses edge ab (b into a, at their projected midpoint, or at a when a is fixed) when the
+  /// link condition holds, no triangle turns over, and the smallest angle around the merged
+  /// vertex is above `min_after` (radians) — or, with `must_improve`, above the smallest angle
+  /// before. Marks the touched vertices busy.
+  bool try_collapse(std::uint32_t a, std::uint32_t b, std::vector<std::uint8_t>& busy,
+                    bool must_improve, double min_after) {
+    if (busy[a] || busy[b] || boundary_[a] || boundary_[b] || (fixed_[a] && fixed_[b])) return false;
+    if (fixed_[b]) std::swap(a, b);  // keep the fixed end where it is
+    neighbours(a, na_);
+    neighbours(b, nb_);
+    common_.clear();
+    std::set_intersection(na_.begin(), na_.end(), nb_.begin(), nb_.end(), std::back_inserter(common_));
+    if (common_.size() != 2) return false;  // link condition
+    for (auto c : common_)
+      if (inc_off_[c + 1] - inc_off_[c] <= 3 || busy[c]) return false;
+    const double len = distance(p_[a], p_[b]);
+    Vec3 q = fixed_[a] ? p_[a] : 0.5 * (p_[a] + p_[b]);
+    if (!fixed_[a] && !project(q, std::max(0.5 * len, o_.voxel))) return false;
+    // The triangles around a and b, except the two on ab, with both ends at q.
+    double old_min = std::numbers::pi, new_min = std::numbers::pi;
+    for (auto v : {a, b}) {
+      for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
+        const Tri& u = t_[inc_[i]];
+        old_min = std::min(old_min, tri_min_angle(u));
+        const bool has_a = u[0] == a || u[1] == a || u[2] == a;
+        const bool has_b = u[0] == b || u[1] == b || u[2] == b;
+        if (has_a && has_b) continue;
+        Vec3 c0 = p_[u[0]], c1 = p_[u[1]], c2 = p_[u[2]];
+        const Vec3 n_old = normalized(tri_normal(c0, c1, c2));
+        for (int j = 0; j < 3; ++j)
+          if (u[j] == a || u[j] == b) (j == 0 ? c0 : j == 1 ? c1 : c2) = q;
+        if (dot(n_old, normalized(tri_normal(c0, c1, c2))) < 0.35) return false;
+        new_min = std::min(new_min, min_angle(c0, c1, c2));
+      }
+    }
+    if (must_improve ? new_min <= old_min : new_min < std::min(old_min, min_after)) return false;
+    if (!ring_error_ok(a, q) || !ring_error_ok(b, q)) return false;
+    p_[a] = q;
+    for (std::uint32_t i = inc_off_[b]; i < inc_off_[b + 1]; ++i) {
+      Tri& u = t_[inc_[i]];
+      if (u[0] == a || u[1] == a || u[2] == a) {
+        tri_alive_[inc_[i]] = 0;
+        continue;
+      }
+      for (auto& w : u)
+        if (w == b) w = a;
+    }
+    for (auto v : na_) busy[v] = 1;
+    for (auto v : nb_) busy[v] = 1;
+    busy[a] = busy[b] = 1;
+    return true;
+  }
+
   std::size_t collapse_pass() {
     build_incidence();
     const double bad = o_.collapse_below_deg * kDeg;
     std::vector<std::uint8_t> busy(p_.size(), 0);
-    std::vector<std::uint32_t> na, nb;
     std::size_t collapses = 0;
-    auto neighbours = [&](std::uint32_t v, std::vector<std::uint32_t>& out) {
-      out.clear();
-      for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i)
-        for (auto u : t_[inc_[i]])
-          if (u != v) out.push_back(u);
-      std::sort(out.begin(), out.end());
-      out.erase(std::unique(out.begin(), out.end()), out.end());
-    };
     for (std::size_t t = 0; t < t_.size(); ++t) {
       if (!tri_alive_[t]) continue;
       const Tri tri = t_[t];
@@ -556,60 +611,44 @@ class Improver {
         if (len[j] < len[k]) k = j;
       const double next = std::min(len[(k + 1) % 3], len[(k + 2) % 3]);
       if (!(len[k] < 0.5 * next)) continue;
-      std::uint32_t a = tri[k], b = tri[(k + 1) % 3];
-      if (boundary_[a] || boundary_[b] || (fixed_[a] && fixed_[b])) continue;
-      if (fixed_[b]) std::swap(a, b);  // keep the fixed end where it is
-      neighbours(a, na);
-      neighbours(b, nb);
-      std::vector<std::uint32_t> common;
-      std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
-      if (common.size() != 2) continue;  // link condition
-      bool low_valence = false;
-      for (auto c : common) {
-        std::uint32_t val = inc_off_[c + 1] - inc_off_[c];
-        low_valence |= val <= 3;
-      }
-      if (low_valence) continue;
-      Vec3 q = fixed_[a] ? p_[a] : 0.5 * (p_[a] + p_[b]);
-      if (!fixed_[a] && !project(q, 0.5 * next)) continue;
-      // The triangles around a and b, except the two on ab, with both ends at q.
-      double old_min = std::numbers::pi, new_min = std::numbers::pi;
-      bool ok = true;
-      for (auto v : {a, b}) {
-        for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1] && ok; ++i) {
-          const Tri& u = t_[inc_[i]];
-          old_min = std::min(old_min, tri_min_angle(u));
-          const bool has_a = u[0] == a || u[1] == a || u[2] == a;
-          const bool has_b = u[0] == b || u[1] == b || u[2] == b;
-          if (has_a && has_b) continue;
-          Vec3 c0 = p_[u[0]], c1 = p_[u[1]], c2 = p_[u[2]];
-          const Vec3 n_old = normalized(tri_normal(c0, c1, c2));
-          for (int j = 0; j < 3; ++j)
-            if (u[j] == a || u[j] == b) (j == 0 ? c0 : j == 1 ? c1 : c2) = q;
-          if (dot(n_old, normalized(tri_normal(c0, c1, c2))) < 0.35) ok = false;
-          new_min = std::min(new_min, min_angle(c0, c1, c2));
-        }
-      }
-      if (!ok || new_min <= old_min) continue;
-      if (!ring_error_ok(a, q) || !ring_error_ok(b, q)) continue;
-      p_[a] = q;
-      for (std::uint32_t i = inc_off_[b]; i < inc_off_[b + 1]; ++i) {
-        Tri& u = t_[inc_[i]];
-        const bool has_a = u[0] == a || u[1] == a || u[2] == a;
-        if (has_a) {
-          tri_alive_[inc_[i]] = 0;
-          continue;
-        }
-        for (auto& w : u)
-          if (w == b) w = a;
-      }
-      for (auto v : na) busy[v] = 1;
-      for (auto v : nb) busy[v] = 1;
-      busy[a] = busy[b] = 1;
-      ++collapses;
+      collapses += try_collapse(tri[k], tri[(k + 1) % 3], busy, true, 0);
     }
     return collapses;
   }
+
+ public:
+  /// Collapses the shortest interior edges (well-shaped collapses only: no triangle below 15°
+  /// unless it was there) until the mesh has at most `target` triangles or nothing collapses.
+  std::size_t decimate(std::size_t target) {
+    std::size_t collapses = 0;
+    for (int pass = 0; pass < 200; ++pass) {
+      const std::size_t have = alive_triangles();
+      if (have <= target) break;
+      const std::size_t need = (have - target + 1) / 2;
+      build_incidence();
+      std::vector<std::pair<double, std::uint64_t>> edges;
+      for_each_interior_edge([&](std::uint32_t t1, std::uint8_t k1, std::uint32_t, std::uint8_t) {
+        const std::uint32_t a = t_[t1][k1], b = t_[t1][(k1 + 1) % 3];
+        edges.push_back({distance(p_[a], p_[b]), (std::uint64_t{a} << 32) | b});
+      });
+      std::sort(edges.begin(), edges.end());
+      std::vector<std::uint8_t> busy(p_.size(), 0);
+      std::size_t done = 0;
+      for (const auto& [len, key] : edges) {
+        if (done == need) break;
+        done += try_collapse(static_cast<std::uint32_t>(key >> 32),
+                             static_cast<std::uint32_t>(key & 0xffffffffu), busy, false, kDecimateMinAngle * kDeg);
+      }
+      collapses += done;
+      if (done == 0) break;
+      flip_pass();  // better-shaped neighbourhoods let more edges go in the next pass
+    }
+    return collapses;
+  }
+
+ private:
+  std::vector<std::uint32_t> na_, nb_, common_;
+
 };
 
 }  // namespace
@@ -626,9 +665,18 @@ ImproveStats improve_mesh(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
 }
 
 ImproveStats improve_base_mesh(BaseMesh& base, const ScalarField* field, double iso,
-                               const ImproveOptions& options) {
+                               const ImproveOptions& options, std::size_t decimate_to) {
   std::vector<std::uint32_t> map;
-  const ImproveStats st = improve_mesh(base.mesh, base.border, field, iso, options, &map);
+  ImproveStats st;
+  if (base.mesh.num_triangles() == 0) return st;
+  {
+    Improver imp(base.mesh, base.border, field, iso, options);
+    const std::size_t removed = decimate_to > 0 ? imp.decimate(decimate_to) : 0;
+    st = imp.run();
+    st.decimated = removed;
+    imp.write(base.mesh, st.collapses + removed > 0, &map);
+    base.mesh.normals.clear();
+  }
   auto remap = [&](auto& per_vertex) {
     std::remove_reference_t<decltype(per_vertex)> out(base.mesh.num_vertices());
     for (std::size_t v = 0; v < map.size() && v < per_vertex.size(); ++v)

@@ -1,0 +1,150 @@
+// Shape improvement (include/adamesh/improve.h): flips, moves with projection, collapses and
+// splits keep the topology, the vertices on the surface and in the box, and raise the smallest
+// angles.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "adamesh/improve.h"
+#include "adamesh/input.h"
+#include "adamesh/metrics.h"
+#include "adamesh/simplify.h"
+#include "adamesh/surfels.h"
+#include "mesh_checks.h"
+
+namespace adamesh {
+namespace {
+
+using testutil::MeshTopo;
+using testutil::mesh_topo;
+
+double min_angle_deg(const Mesh& m) { return quality(m).min_angle.min; }
+double pct_below_20(const Mesh& m) { return quality(m).pct_min_angle_below[1]; }
+
+/// A flat n×n grid of squares split along one diagonal, with every other interior vertex pushed
+/// along x by `shift` of a cell: many slivers, all fixable by flips and moves in the plane.
+Mesh sheared_grid(int n, double shift) {
+  Mesh m;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      double x = i, y = j;
+      if (i > 0 && i < n && j > 0 && j < n && (i + j) % 2 == 0) x += shift;
+      m.add_vertex({x, y, 0});
+    }
+  auto id = [&](int i, int j) { return static_cast<std::uint32_t>(j * (n + 1) + i); };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      m.add_triangle(id(i, j), id(i + 1, j), id(i + 1, j + 1));
+      m.add_triangle(id(i, j), id(i + 1, j + 1), id(i, j + 1));
+    }
+  return m;
+}
+
+TEST(Improve, FlatGridSliversAreRemovedWithoutAField) {
+  Mesh m = sheared_grid(12, 0.8);
+  const MeshTopo before = mesh_topo(m);
+  const double pct_before = pct_below_20(m);
+  ASSERT_GT(pct_before, 10.0);
+  ImproveOptions o;
+  o.max_deviation = 1e-9;  // flat: any flip keeps the surface
+  o.collapse_below_deg = 0;
+  const ImproveStats st = improve_mesh(m, {}, nullptr, 0, o);
+  EXPECT_GT(st.flips + st.moves, 0u);
+  const MeshTopo after = mesh_topo(m);
+  EXPECT_EQ(after.triangles, before.triangles);
+  EXPECT_EQ(after.chi, before.chi);
+  EXPECT_EQ(after.boundary_loops, 1);
+  EXPECT_TRUE(after.oriented);
+  EXPECT_EQ(after.nonmanifold_edges, 0);
+  EXPECT_LT(pct_below_20(m), 1.0);
+  EXPECT_GT(min_angle_deg(m), 20.0);
+  // Everything stays in the plane z = 0, and the boundary vertices where they were.
+  for (std::size_t v = 0; v < m.num_vertices(); ++v) EXPECT_EQ(m.vertex(v).z, 0.0);
+  EXPECT_EQ(m.vertex(0).x, 0.0);
+  EXPECT_EQ(m.vertex(12).x, 12.0);
+}
+
+TEST(Improve, FixedVerticesStayAndTheBoxHolds) {
+  Mesh m = sheared_grid(8, 0.7);
+  std::vector<std::uint8_t> fixed(m.num_vertices(), 0);
+  fixed[4 * 9 + 4] = 1;  // the centre (i = j = 4), pushed by 0.7
+  const Vec3 centre = m.vertex(4 * 9 + 4);
+  ImproveOptions o;
+  o.max_deviation = 1e-9;
+  o.box = Box{{0, 0, -1}, {8, 8, 1}};
+  improve_mesh(m, fixed, nullptr, 0, o);
+  EXPECT_EQ(m.vertex(4 * 9 + 4), centre);
+  for (std::size_t v = 0; v < m.num_vertices(); ++v) {
+    const Vec3 p = m.vertex(v);
+    EXPECT_TRUE(p.x >= 0 && p.x <= 8 && p.y >= 0 && p.y <= 8) << v;
+  }
+}
+
+/// Base mesh of a sampled noisy shape: the improvement keeps the topology and the count, puts
+/// the moved vertices on the surface and raises the smallest angles.
+TEST(Improve, NoisyBaseMeshKeepsTopologyAndGetsBetter) {
+  // A sphere with voxel-scale bumps, sampled (not analytic: the trilinear field is bumpy).
+  InputOptions io;
+  io.resolution = 48;
+  const Input in = load_input("expr:x^2+y^2+z^2-0.6+0.02*sin(40*x)*sin(37*y)*sin(43*z)", io);
+  const SurfelComplex sc = build_surfels(*in.volume, 0.0, in.inside_sign);
+  BaseMesh base = simplify(sc, in.field.get());
+  const MeshTopo before = mesh_topo(base.mesh);
+  const double worst_before = min_angle_deg(base.mesh);
+  Mesh m = base.mesh;
+  ImproveOptions o;
+  o.voxel = sc.grid.min_spacing();
+  o.box = in.field->domain();
+  o.target_triangles = m.num_triangles();
+  std::vector<std::uint8_t> fixed = base.border;
+  const ImproveStats st = improve_mesh(m, fixed, in.field.get(), 0.0, o);
+  const MeshTopo after = mesh_topo(m);
+  EXPECT_EQ(after.chi, before.chi);
+  EXPECT_EQ(after.components, before.components);
+  EXPECT_EQ(after.boundary_loops, before.boundary_loops);
+  EXPECT_EQ(after.nonmanifold_edges, 0);
+  EXPECT_TRUE(after.oriented);
+  EXPECT_LE(std::abs(after.triangles - before.triangles), 1);
+  EXPECT_GE(min_angle_deg(m), worst_before);
+  EXPECT_LE(st.pct_below_20_after, st.pct_below_20_before);
+  // Vertices on the iso-surface (moved ones are projected, the others were already on it).
+  double worst = 0;
+  for (std::size_t v = 0; v < m.num_vertices(); ++v)
+    worst = std::max(worst, std::abs(signed_distance(*in.field, 0.0, m.vertex(v))));
+  EXPECT_LT(worst, 0.05 * o.voxel);
+}
+
+TEST(Improve, Deterministic) {
+  Mesh a = sheared_grid(10, 0.75), b = sheared_grid(10, 0.75);
+  ImproveOptions o;
+  o.max_deviation = 1e-9;
+  improve_mesh(a, {}, nullptr, 0, o);
+  improve_mesh(b, {}, nullptr, 0, o);
+  EXPECT_EQ(a.positions, b.positions);
+  EXPECT_EQ(a.triangles, b.triangles);
+}
+
+TEST(Improve, DecimationReachesTheTargetAndKeepsTopology) {
+  const Input in = load_input("shape:torus");
+  const SurfelComplex sc = build_surfels(*in.volume, 0.0, in.inside_sign);
+  BaseMesh base = simplify(sc, in.field.get());
+  const MeshTopo before = mesh_topo(base.mesh);
+  const std::size_t target = base.mesh.num_triangles() / 3;
+  ImproveOptions o;
+  o.voxel = sc.grid.min_spacing();
+  o.box = in.field->domain();
+  const ImproveStats st = improve_base_mesh(base, in.field.get(), 0.0, o, target);
+  EXPECT_GT(st.decimated, 0u);
+  EXPECT_LE(base.mesh.num_triangles(), target + 2);
+  const MeshTopo after = mesh_topo(base.mesh);
+  EXPECT_EQ(after.chi, before.chi);
+  EXPECT_EQ(after.components, before.components);
+  EXPECT_TRUE(after.oriented);
+  EXPECT_EQ(after.nonmanifold_edges, 0);
+  ASSERT_EQ(base.anchor.size(), base.mesh.num_vertices());
+  ASSERT_EQ(base.border.size(), base.mesh.num_vertices());
+  EXPECT_GT(min_angle_deg(base.mesh), 15.0);
+}
+
+}  // namespace
+}  // namespace adamesh
