@@ -51,6 +51,9 @@ struct Input {
 /// Throws Error with a one-line message naming the input and the problem.
 Input load_input(const std::string& spec, const InputOptions& options = {});
 
+/// True for `shape:NAME` and `expr:EXPR` (implicit inputs: sampled fields, default iso-value 0).
+bool is_implicit_spec(const std::string& spec) noexcept;
+
 /// Names of the built-in shapes (`shape:NAME`).
 std::vector<std::string> shape_names();
 
