@@ -15,6 +15,7 @@ enum class Status : int {
   unsupported = 3,     ///< valid input using a feature adamesh does not implement
   output_failed = 4,   ///< an output file could not be written
   internal = 5,        ///< a broken invariant inside adamesh (a bug)
+  cancelled = 6,       ///< the caller's cancellation flag was set (ExecutionContext::cancel)
 };
 
 const char* to_string(Status s) noexcept;

@@ -69,6 +69,9 @@ std::vector<LabelCount> label_counts(const Volume& volume, std::size_t max_label
 /// volume or a label no voxel has.
 Input label_input(const Input& in, std::int64_t label);
 
+/// True for `shape:NAME` and `expr:EXPR` (implicit inputs: sampled fields, default iso-value 0).
+bool is_implicit_spec(const std::string& spec) noexcept;
+
 /// Names of the built-in shapes (`shape:NAME`).
 std::vector<std::string> shape_names();
 

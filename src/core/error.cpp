@@ -10,6 +10,7 @@ const char* to_string(Status s) noexcept {
     case Status::unsupported: return "unsupported";
     case Status::output_failed: return "output failed";
     case Status::internal: return "internal error";
+    case Status::cancelled: return "cancelled";
   }
   return "unknown";
 }

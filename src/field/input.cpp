@@ -88,6 +88,10 @@ std::int64_t handle_nonfinite(Volume& v, const std::string& spec, const InputOpt
 
 }  // namespace
 
+bool is_implicit_spec(const std::string& spec) noexcept {
+  return spec.rfind("shape:", 0) == 0 || spec.rfind("expr:", 0) == 0;
+}
+
 Input load_input(const std::string& spec, const InputOptions& options) {
   if (options.nan_value && !std::isfinite(*options.nan_value))
     fail(Status::usage, spec + ": --nan-value must be a finite number");

@@ -1,0 +1,16 @@
+#include "adamesh/context.h"
+
+#include "adamesh/error.h"
+
+namespace adamesh {
+
+void ExecutionContext::check_cancelled() const {
+  if (cancelled()) fail(Status::cancelled, "cancelled");
+}
+
+void ExecutionContext::report(const char* stage, double fraction) const {
+  check_cancelled();
+  if (progress) progress(stage, fraction);
+}
+
+}  // namespace adamesh

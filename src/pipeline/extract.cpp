@@ -1,0 +1,368 @@
+// extract(): the pipeline as named steps (ALGORITHM.md 2.2–2.10), with the memory released
+// between them (docs/SIMPLIFICATION.md, "Memory"):
+//   1. check    the iso-value against the value range (an empty surface is an error)
+//   2. surfels  surfel complex of the volume; the worker arenas' freed slabs go back
+//   3. graph    connectivity graph; the surfels' voxel indices go (nothing downstream reads them)
+//   4. covering disk + Voronoi covering, run without the nodes' keys and positions (20 B/node)
+//   5. dual     the graph's adjacency goes, the node geometry comes back; base mesh M0
+//   5b. shape   M0's shape improved (and M0 decimated below a small triangle budget), improve.h
+//   6. refine   the graph again (deterministic), 4-8 refinement, the budget's cut, its shape
+//               improved (adaptive budgets), per-level figures for the report
+//   7. report   the complex and the graph go before M0's topology is measured
+#include <malloc.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <utility>
+
+#include "adamesh/error.h"
+#include "adamesh/extract.h"
+#include "adamesh/graph.h"
+#include "adamesh/improve.h"
+#include "adamesh/stats.h"
+#include "adamesh/surfels.h"
+
+namespace adamesh {
+
+namespace {
+
+class Stopwatch {
+ public:
+  double lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double s = std::chrono::duration<double>(now - t0_).count();
+    t0_ = now;
+    return s;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
+};
+
+/// Returns the freed memory of all malloc arenas to the system: the stages free large arrays
+/// and the worker threads' arenas keep their freed slab buffers otherwise.
+void release_freed_memory() { malloc_trim(0); }
+
+/// Blocks of 1 MiB and more get their own mappings, returned to the system when freed. glibc
+/// otherwise raises this threshold as large blocks are freed and serves them from the heap,
+/// where the stages' freed arrays fragment and stay resident. Process-wide, set once.
+void tune_malloc() {
+  static const bool once = [] { return mallopt(M_MMAP_THRESHOLD, 1 << 20) != 0; }();
+  (void)once;
+}
+
+void check_options(const ExtractOptions& o) {
+  if (o.context.threads < 0 || o.context.threads > 1024)
+    fail(Status::usage, "extract: threads must be 0..1024");
+  if (o.r_max < 0 || o.r_min < 0 || !std::isfinite(o.r_max) || !std::isfinite(o.r_min))
+    fail(Status::usage, "extract: radii must be positive");
+  switch (o.budget) {
+    case Budget::levels:
+      if (o.levels < 0 || o.levels > 30) fail(Status::usage, "extract: levels must be 0..30");
+      break;
+    case Budget::max_error:
+      if (!(o.max_error > 0) || !std::isfinite(o.max_error))
+        fail(Status::usage, "extract: max_error must be > 0");
+      break;
+    case Budget::triangles:
+      if (o.triangles < 1) fail(Status::usage, "extract: triangles must be >= 1");
+      break;
+    case Budget::none:
+    case Budget::automatic: break;
+  }
+}
+
+/// The iso-value to use; fails when it is missing, not finite or gives an empty surface.
+double checked_iso(const Input& in, const ExtractOptions& o) {
+  double iso = 0;
+  if (o.iso) iso = *o.iso;
+  else if (in.default_iso) iso = *in.default_iso;
+  else fail(Status::usage, in.spec + ": an iso-value is required for volume files");
+  if (!std::isfinite(iso)) fail(Status::usage, in.spec + ": the iso-value must be finite");
+  const VolumeStats st = compute_stats(*in.volume);
+  if (!(iso > st.min && iso <= st.max) && !(iso >= st.min && iso < st.max))
+    fail_input(in.spec, "iso-value " + std::to_string(iso) + " is outside the value range [" +
+                            std::to_string(st.min) + ", " + std::to_string(st.max) +
+                            "]: the surface would be empty");
+  return iso;
+}
+
+LevelReport measure(const Mesh& mesh, const Input& in, double iso, int threads) {
+  LevelReport l;
+  FieldErrorOptions fo;
+  fo.inside_sign = in.inside_sign;
+  fo.threads = threads;
+  l.error = field_error(mesh, *in.field, iso, fo);
+  MetricsOptions mo;
+  mo.threads = threads;
+  l.quality = quality(mesh, mo);
+  l.triangles = mesh.num_triangles();
+  l.vertices = mesh.num_vertices();
+  return l;
+}
+
+/// Refine options for the budget; `chosen` describes it in the CLI's words for the report.
+RefineOptions refine_options(const ExtractOptions& o, const SurfelComplex& sc, std::string& chosen) {
+  const double h = sc.grid.min_spacing();
+  RefineOptions ro;
+  ro.threads = o.context.threads;
+  std::ostringstream s;
+  switch (o.budget) {
+    case Budget::levels:
+      ro.mode = RefineMode::uniform;
+      ro.levels = o.levels;
+      s << "--levels " << o.levels;
+      break;
+    case Budget::triangles:
+      ro.mode = RefineMode::budget;
+      ro.max_triangles = o.triangles;
+      s << "--triangles " << o.triangles;
+      break;
+    case Budget::max_error:
+      ro.mode = RefineMode::max_error;
+      ro.max_error = o.max_error;
+      s << "--max-error " << o.max_error << " (" << o.max_error / h << " voxel)";
+      break;
+    case Budget::automatic:
+    case Budget::none:
+      // The default never gives more triangles than marching cubes would (noisy or label
+      // volumes: the frog reached 4.7M triangles at 0.25 voxel, three times marching cubes).
+      ro.mode = RefineMode::max_error;
+      ro.max_error = kDefaultMaxErrorVoxels * h;
+      ro.max_triangles = marching_cubes_triangles(sc);
+      s << "--max-error " << ro.max_error << " (" << kDefaultMaxErrorVoxels
+        << " voxel, the default), at most " << ro.max_triangles
+        << " triangles (marching cubes' count)";
+      break;
+  }
+  ro.progress = [&ctx = o.context](const char*, double f) { ctx.report("refine", f); };
+  chosen = s.str();
+  return ro;
+}
+
+/// Which components keep a triangle budget `n` out of reach, and the smallest --min-component
+/// (surfels) that would bring it in: one line for the warnings.
+std::string unreachable_budget_note(const BaseMesh& base, const ConnectivityGraph& g, std::size_t n) {
+  std::vector<std::size_t> surfels(g.num_components, 0), tris(g.num_components, 0);
+  for (std::size_t v = 0; v < g.num_vertices(); ++v) ++surfels[g.component[v]];
+  for (std::size_t t = 0; t < base.mesh.num_triangles(); ++t)
+    ++tris[base.component[base.mesh.triangles[3 * t]]];
+  std::vector<std::uint32_t> comps;
+  for (std::uint32_t c = 0; c < g.num_components; ++c)
+    if (tris[c] > 0) comps.push_back(c);
+  std::stable_sort(comps.begin(), comps.end(),
+                   [&](auto a, auto b) { return surfels[a] < surfels[b]; });
+  std::ostringstream s;
+  s << "--triangles " << n << " is out of reach: the " << comps.size()
+    << " surface components need at least " << base.mesh.num_triangles()
+    << " triangles with this topology, and the output has that many";
+  // Drop the smallest components (whole size classes) until the rest fits.
+  std::size_t total = base.mesh.num_triangles(), dropped = 0, i = 0;
+  while (i < comps.size() && total > n) {
+    const std::size_t size = surfels[comps[i]];
+    for (; i < comps.size() && surfels[comps[i]] == size; ++i, ++dropped) total -= tris[comps[i]];
+  }
+  if (total <= n && i < comps.size())
+    s << "; " << dropped << " of them have fewer than " << surfels[comps[i]]
+      << " surfels: --min-component " << surfels[comps[i]] << " reaches it";
+  else
+    s << "; a larger --rmax gives a coarser base mesh";
+  return s.str();
+}
+
+ExtractResult run_pipeline(const Input& in, const ExtractOptions& o, double read_s) {
+  const ExecutionContext& ctx = o.context;
+  ExtractResult res;
+  ExtractReport& rep = res.report;
+  auto& timings = rep.timings_s;
+  auto& rss = rep.peak_rss_after_mb;
+  Stopwatch clock;
+
+  // 1. check
+  const double iso = checked_iso(in, o);
+  rep.input = in.spec;
+  rep.iso = iso;
+  timings["read"] = read_s + clock.lap();
+  rss["read"] = peak_rss_mb();
+
+  // 2. surfels
+  ctx.report("surfels", 0);
+  SurfelOptions so;
+  so.threads = ctx.threads;
+  SurfelComplex sc = build_surfels(*in.volume, iso, in.inside_sign, so);
+  ctx.report("surfels", 1);
+  timings["surfels"] = clock.lap();
+  rss["surfels"] = peak_rss_mb();
+  release_freed_memory();
+  if (sc.num_surfels() == 0) fail_input(in.spec, "no surface at iso-value " + std::to_string(iso));
+
+  // 3. graph
+  ctx.report("graph", 0);
+  ConnectivityGraph g = build_graph(sc);
+  rep.graph = {g.num_vertices(), g.num_edges(), g.num_components, g.col.empty()};
+  std::vector<std::uint64_t>().swap(sc.surfel_voxel);  // nothing downstream reads them
+  ctx.report("graph", 1);
+  timings["graph"] = clock.lap();
+  rss["graph"] = peak_rss_mb();
+  release_freed_memory();
+
+  // 4. covering, without the node keys and positions: they are recomputed from the volume after.
+  SimplifyOptions opt;
+  opt.threads = ctx.threads;
+  opt.r_max = o.r_max;
+  opt.r_min = o.r_min;
+  opt.unit = o.unit;
+  opt.min_component_surfels = o.min_component;
+  opt.progress = [&ctx](const char* stage, double f) { ctx.report(stage, f); };
+  if (opt.r_max <= 0) opt.surface_area = active_surface_area(sc, g, opt);
+  release_node_geometry(sc);
+  ctx.report("disk cover", 0);
+  SimplifyStats stats;
+  Covering cov = build_covering(sc, g, opt, stats);
+  ctx.report("disk cover", 1);
+  if (o.validate) stats.validation = validate_covering(sc, g, cov);
+  clock.lap();
+  timings["disk_cover"] = stats.time_disk_cover_s;
+  timings["voronoi"] = stats.time_voronoi_s;
+  rss["covering"] = peak_rss_mb();
+
+  // 5. dual: it reads the graph's components and border flags, not its adjacency, which goes
+  // while the node geometry comes back; the refinement rebuilds it. The dual takes the covering.
+  ctx.report("dual", 0);
+  g.release_adjacency();
+  release_freed_memory();  // the covering's freed small blocks
+  restore_node_geometry(*in.volume, sc, so);
+  res.base = build_base_mesh(sc, g, std::move(cov), in.field.get(), opt, std::move(stats));
+  ctx.report("dual", 1);
+  timings["dual"] = clock.lap();
+  rss["dual"] = peak_rss_mb();
+
+  // 5b. shape of M0: level 0 is free to change until the blocks are built, and its slivers
+  // would be bisected into more (docs/QUALITY.md). A triangle budget below M0's size decimates
+  // it first so that the refinement has room.
+  if (o.improve) {
+    ctx.report("improve M0", 0);
+    ImproveOptions io;
+    io.voxel = sc.grid.min_spacing();
+    io.box = in.field->domain();
+    std::size_t decimate_to = 0;
+    if (o.budget == Budget::triangles && res.base.mesh.num_triangles() > o.triangles / 2)
+      decimate_to = std::max<std::size_t>(o.triangles / 4, 1);
+    rep.base_improve = improve_base_mesh(res.base, in.field.get(), iso, io, decimate_to);
+    ctx.report("improve M0", 1);
+    timings["improve_base"] = clock.lap();
+  }
+  if (o.budget == Budget::triangles && res.base.mesh.num_triangles() > o.triangles)
+    res.base.stats.warnings.push_back(unreachable_budget_note(res.base, g, o.triangles));
+
+  // 6. refine
+  if (o.budget != Budget::none) {
+    g = build_graph(sc);  // the same graph again (deterministic), adjacency included
+    timings["graph"] += clock.lap();
+    RefineOptions ro = refine_options(o, sc, rep.chosen);
+    if (ro.mode == RefineMode::max_error) rep.triangle_cap = ro.max_triangles;
+    ctx.report("refine", 0);
+    RefineResult r = refine(sc, res.base, *in.field, ro, &g);
+    CutMesh cut = extract_all(r.hierarchy);
+    ctx.report("refine", 1);
+    timings["refine"] = clock.lap();
+    // Shape of the output: adaptive cuts keep their triangle count and an explicit error bound;
+    // uniform levels stay as the hierarchy has them (semi-regular, nested).
+    if (o.improve && ro.mode != RefineMode::uniform) {
+      ctx.report("improve", 0);
+      ImproveOptions io;
+      io.voxel = sc.grid.min_spacing();
+      io.box = in.field->domain();
+      io.target_triangles = cut.mesh.num_triangles();
+      // An explicit --max-error is a bound the improvement keeps; the default's cap at marching
+      // cubes' count already gives up the bound where it binds.
+      if (ro.mode == RefineMode::max_error && ro.max_triangles == 0) {
+        io.max_deviation = std::min(ro.max_error, 0.25 * io.voxel);
+        io.max_error = ro.max_error;
+      }
+      rep.improve = improve_mesh(cut.mesh, cut.vertex_border, in.field.get(), iso, io);
+      ctx.report("improve", 1);
+      timings["improve"] = clock.lap();
+    }
+    rep.refined = true;
+    rep.refine = std::move(r.stats);
+    rep.triangles = cut.mesh.num_triangles();
+    rep.vertices = cut.mesh.num_vertices();
+    rep.depth = cut.max_level;
+    res.mesh = std::move(cut.mesh);
+    cut = CutMesh{};
+    res.hierarchy = std::move(r.hierarchy);
+    if (o.measure_levels) {
+      ctx.report("measure", 0);
+      const int last = ro.mode == RefineMode::uniform ? ro.levels : 0;
+      for (int j = 0; j <= last; ++j) {
+        LevelReport l = measure(extract_level(*res.hierarchy, j).mesh, in, iso, ctx.threads);
+        l.level = j;
+        rep.levels.push_back(std::move(l));
+        ctx.report("measure", static_cast<double>(j + 1) / (last + 2));
+      }
+      if (ro.mode != RefineMode::uniform) {
+        LevelReport l = measure(res.mesh, in, iso, ctx.threads);
+        l.level = -1;
+        l.depth = rep.depth;
+        rep.levels.push_back(std::move(l));
+      }
+      ctx.report("measure", 1);
+    }
+    clock.lap();
+    rss["refine"] = peak_rss_mb();
+  }
+
+  // 7. report: the complex and the graph are done with; the topology report needs room.
+  rep.surfels = sc.num_surfels();
+  sc = SurfelComplex{};
+  g = ConnectivityGraph{};
+  release_freed_memory();
+  rep.base_topology = topology(res.base.mesh);
+  rep.base_q_mean = quality(res.base.mesh).q_mean;
+  rep.covering = res.base.stats;
+  rep.peak_rss_mb = peak_rss_mb();
+  return res;
+}
+
+/// Runs `f` with at most `threads` worker threads (0: the caller's arena).
+template <class F>
+auto with_threads(int threads, F&& f) {
+  if (threads <= 0) return f();
+  tbb::task_arena arena(threads);
+  return arena.execute(std::forward<F>(f));
+}
+
+}  // namespace
+
+std::size_t marching_cubes_triangles(const SurfelComplex& sc) {
+  std::size_t n = 0;
+  for (std::size_t s = 0; s < sc.num_surfels(); ++s)
+    n += sc.surfel_offset[s + 1] - sc.surfel_offset[s] - 2;
+  return n;
+}
+
+ExtractResult extract(const Input& input, const ExtractOptions& options) {
+  check_options(options);
+  if (!input.volume || !input.field) fail(Status::usage, input.spec + ": input has no volume");
+  tune_malloc();
+  return with_threads(options.context.threads, [&] { return run_pipeline(input, options, 0.0); });
+}
+
+ExtractResult extract(const std::string& spec, const ExtractOptions& options,
+                      const InputOptions& input_options) {
+  check_options(options);
+  tune_malloc();
+  return with_threads(options.context.threads, [&] {
+    Stopwatch clock;
+    options.context.report("read", 0);
+    const Input in = load_input(spec, input_options);
+    options.context.report("read", 1);
+    return run_pipeline(in, options, clock.lap());
+  });
+}
+
+}  // namespace adamesh
