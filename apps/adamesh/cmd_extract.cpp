@@ -2,7 +2,10 @@
 // (adamesh/extract.h: surfels → graph → covering → base mesh → 4-8 refinement) and writes the
 // files asked for.
 #include <cmath>
+#include <filesystem>
+#include <cstdio>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "adamesh/atomic_file.h"
@@ -38,6 +41,12 @@ std::vector<OptionSpec> extract_specs() {
        "at most as many triangles as marching cubes)"},
       {"--triangles", true, "adaptive: the N-triangle mesh, worst triangles split first"},
       {"--hierarchy", true, "write the refinement hierarchy (.amh, see docs/HIERARCHY.md)"},
+      {"--labels", true,
+       "label maps: 'all' meshes every label but 0 into -o DIR/ (DIR/label_L.EXT, a summary "
+       "table and DIR/labels.json)"},
+      {"--format", true, "with --labels all: mesh format of the files (ply obj off stl; default ply)"},
+      {"--min-cavity", true,
+       "topology control: fill cavities (enclosed pockets of outside) of fewer voxels than this"},
       {"--no-improve", false,
        "no shape improvement of M0 and of the written mesh (flips, moves, collapses; "
        "docs/QUALITY.md): the output is the hierarchy's cut as it is"},
@@ -59,7 +68,7 @@ ExtractOptions extract_options(const Args& args, const std::string& spec) {
   if (auto v = args.get_double("--iso")) {
     if (!std::isfinite(*v)) fail(Status::usage, "adamesh extract: --iso must be finite");
     opt.iso = *v;
-  } else if (!is_implicit_spec(spec)) {
+  } else if (!is_implicit_spec(spec) && !args.has("--label") && !args.has("--labels")) {
     fail(Status::usage, "adamesh extract: " + spec + ": --iso is required for volume files");
   }
   if (auto k = args.get_int("--levels")) {
@@ -88,11 +97,77 @@ ExtractOptions extract_options(const Args& args, const std::string& spec) {
   }
   opt.validate = args.has("--validate");
   opt.improve = !args.has("--no-improve");
+  if (auto c = args.get_int("--min-cavity")) {
+    if (*c < 0) fail(Status::usage, "adamesh extract: --min-cavity must be >= 0");
+    opt.min_cavity = *c;
+  }
   opt.measure_levels = args.has("--report");
   return opt;
 }
 
 }  // namespace
+
+/// `--labels all -o DIR/`: one extract() per label of a label map (every label but 0, the
+/// background), DIR/label_L.EXT each, a table on stdout and DIR/labels.json.
+int extract_all_labels(const Args& args, const std::string& spec, const ExtractOptions& opt) {
+  const std::string which = *args.get("--labels");
+  if (which != "all") fail(Status::usage, "adamesh extract: --labels takes 'all' (one label: --label L)");
+  if (args.has("--label") || args.has("--iso"))
+    fail(Status::usage, "adamesh extract: --labels all meshes every label at iso 0.5 of its mask; "
+                        "drop --label/--iso");
+  if (args.has("--base") || args.has("--hierarchy") || args.has("--report"))
+    fail(Status::usage, "adamesh extract: --labels all writes one mesh per label into -o DIR/ "
+                        "(and DIR/labels.json); --base, --hierarchy and --report are per mesh");
+  const auto out = args.get("-o");
+  if (!out) fail(Status::usage, "adamesh extract: --labels all needs -o DIR/");
+  const std::filesystem::path dir(*out);
+  std::error_code ec;
+  if (!std::filesystem::is_directory(dir, ec))
+    fail(Status::output_failed, *out + ": --labels all writes into a folder, and this one does not "
+                                       "exist (create it first)");
+  const std::string ext = args.get("--format").value_or("ply");
+  if (ext != "ply" && ext != "obj" && ext != "off" && ext != "stl")
+    fail(Status::usage, "adamesh extract: --format must be ply, obj, off or stl");
+  const bool quiet = args.has("--quiet");
+  InputOptions io = input_options_from(args);
+  const Input in = load_input(spec, io);
+  const std::vector<LabelCount> labels = label_counts(*in.volume);
+  if (labels.empty())
+    fail_input(spec, "not a label map (a floating volume, or more than 64 distinct values): "
+                     "mesh it with --iso V");
+  MeshWriteOptions wo;
+  wo.ascii = args.has("--ascii");
+  nlohmann::json table = nlohmann::json::array();
+  if (!quiet)
+    std::printf("   label       voxels  triangles  components     χ   seconds  file\n");
+  for (const LabelCount& l : labels) {
+    if (l.label == 0) continue;
+    Stopwatch clock;
+    const Input li = label_input(in, l.label);
+    ExtractResult res = extract(li, opt);
+    const std::string file = (dir / ("label_" + std::to_string(l.label) + "." + ext)).string();
+    write_mesh(res.mesh.num_triangles() ? res.mesh : res.base.mesh, file, wo);
+    const Mesh& m = res.mesh.num_triangles() ? res.mesh : res.base.mesh;
+    const TopologyReport t = topology(m);
+    const double secs = clock.lap();
+    table.push_back({{"label", l.label}, {"voxels", l.voxels}, {"triangles", m.num_triangles()},
+                     {"components", t.components}, {"euler", t.euler},
+                     {"boundary_loops", t.boundary_loops}, {"seconds", secs}, {"file", file},
+                     {"warnings", res.report.covering.warnings}});
+    if (!quiet) {
+      std::printf("%8lld %12lld %10zu %11zu %5lld %9.2f  %s\n", static_cast<long long>(l.label),
+                  static_cast<long long>(l.voxels), m.num_triangles(),
+                  static_cast<std::size_t>(t.components), static_cast<long long>(t.euler), secs,
+                  file.c_str());
+      std::fflush(stdout);
+      for (const auto& w : res.report.covering.warnings)
+        std::cerr << "adamesh: warning: label " << l.label << ": " << w << "\n";
+    }
+  }
+  const std::string json = nlohmann::json{{"input", spec}, {"labels", table}}.dump(2) + "\n";
+  write_file_atomically((dir / "labels.json").string(), [&](std::ostream& o) { o << json; }, false);
+  return 0;
+}
 
 int cmd_extract(const Argv& argv) {
   const Args args("extract", argv, extract_specs());
@@ -108,6 +183,7 @@ int cmd_extract(const Argv& argv) {
     fail(Status::usage, "adamesh extract: nothing to write: give -o FILE, --hierarchy FILE, "
                         "--base FILE or --report FILE");
   ExtractOptions opt = extract_options(args, spec);
+  if (args.has("--labels")) return extract_all_labels(args, spec, opt);
   const InputOptions input = input_options_from(args);
 
   Progress progress(quiet);

@@ -50,6 +50,11 @@ struct ExtractOptions {
   std::size_t min_component = 0;  ///< drop components with fewer surfels (0: keep all)
   bool validate = false;        ///< run the covering validator (slow); fills report.covering
 
+  // ---- Topology control (off by default: the exact topology of the trilinear iso-surface).
+  /// Fill cavities (enclosed pockets of outside, 6-connected) with fewer samples than this before
+  /// extraction (fill_cavities()); 0 = keep them. Voxels.
+  std::int64_t min_cavity = 0;
+
   // ---- Shape (docs/QUALITY.md).
   /// Improve the shape of M0 before the blocks are built and of the output mesh (adaptive
   /// budgets; uniform levels are written as the hierarchy has them): edge flips, tangential moves
@@ -98,6 +103,7 @@ struct ExtractReport {
   std::size_t triangles = 0, vertices = 0;  ///< of the output mesh
   int depth = 0;                    ///< deepest triangle level of the output mesh
   std::vector<LevelReport> levels;  ///< when measure_levels
+  CavityReport cavities;            ///< ExtractOptions::min_cavity
   ImproveStats base_improve;        ///< shape improvement (and decimation) of M0
   ImproveStats improve;             ///< shape improvement of the output mesh
   /// Seconds per stage: surfels, graph, disk_cover, voronoi, dual, refine (read: load + the

@@ -155,9 +155,11 @@ std::string unreachable_budget_note(const BaseMesh& base, const ConnectivityGrap
     if (tris[c] > 0) comps.push_back(c);
   std::stable_sort(comps.begin(), comps.end(),
                    [&](auto a, auto b) { return surfels[a] < surfels[b]; });
+  const TopologyReport topo = topology(base.mesh);
   std::ostringstream s;
   s << "--triangles " << n << " is out of reach: the " << comps.size()
-    << " surface components need at least " << base.mesh.num_triangles()
+    << " surface components (χ " << topo.euler << ", " << topo.boundary_loops
+    << " boundary loops) need at least " << base.mesh.num_triangles()
     << " triangles with this topology, and the output has that many";
   // Drop the smallest components (whole size classes) until the rest fits.
   std::size_t total = base.mesh.num_triangles(), dropped = 0, i = 0;
@@ -168,12 +170,15 @@ std::string unreachable_budget_note(const BaseMesh& base, const ConnectivityGrap
   if (total <= n && i < comps.size())
     s << "; " << dropped << " of them have fewer than " << surfels[comps[i]]
       << " surfels: --min-component " << surfels[comps[i]] << " reaches it";
+  else if (topo.euler < 0)
+    s << "; most of them go to handles and tunnels (χ " << topo.euler
+      << "): --min-cavity V fills small cavities, --min-component S drops small components";
   else
     s << "; a larger --rmax gives a coarser base mesh";
   return s.str();
 }
 
-ExtractResult run_pipeline(const Input& in, const ExtractOptions& o, double read_s) {
+ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double read_s) {
   const ExecutionContext& ctx = o.context;
   ExtractResult res;
   ExtractReport& rep = res.report;
@@ -181,8 +186,15 @@ ExtractResult run_pipeline(const Input& in, const ExtractOptions& o, double read
   auto& rss = rep.peak_rss_after_mb;
   Stopwatch clock;
 
-  // 1. check
-  const double iso = checked_iso(in, o);
+  // 1. check; topology control in the volume (cavities filled on a copy)
+  const double iso = checked_iso(input, o);
+  Input filled;
+  if (o.min_cavity > 0) {
+    ctx.report("cavities", 0);
+    filled = fill_cavities(input, iso, o.min_cavity, rep.cavities);
+    ctx.report("cavities", 1);
+  }
+  const Input& in = o.min_cavity > 0 ? filled : input;
   rep.input = in.spec;
   rep.iso = iso;
   timings["read"] = read_s + clock.lap();

@@ -97,6 +97,10 @@ std::string report_json(const ExtractReport& rep) {
   r["base"] = topology_json(rep.base_topology);
   r["base"]["quality"] = {{"q_mean", rep.base_q_mean}};
   r["base"]["improve"] = improve_json(rep.base_improve);
+  r["topology_control"] = {{"cavities_filled", rep.cavities.filled},
+                           {"cavity_voxels_filled", rep.cavities.filled_voxels},
+                           {"largest_cavity_filled", rep.cavities.largest_filled},
+                           {"components_dropped", st.dropped_components}};
   r["fallback_components"] = st.fallback_components;
   r["dropped_components"] = st.dropped_components;
   r["covering"] = {{"r_max", st.r_max},
@@ -136,6 +140,11 @@ std::string report_json(const ExtractReport& rep) {
 std::string base_summary(const ExtractReport& rep) {
   const TopologyReport& topo = rep.base_topology;
   std::ostringstream s;
+  if (rep.cavities.filled > 0)
+    s << "filled " << rep.cavities.filled << " cavities (" << rep.cavities.filled_voxels
+      << " voxels, the largest " << rep.cavities.largest_filled << "); ";
+  if (rep.covering.dropped_components > 0)
+    s << "dropped " << rep.covering.dropped_components << " components below --min-component; ";
   s << "surfels " << rep.surfels << " -> base mesh " << topo.vertices << " vertices, "
     << topo.triangles << " triangles (χ " << topo.euler << ", " << topo.components
     << " components, " << topo.boundary_loops << " boundary loops)";

@@ -97,6 +97,7 @@ class Improver {
     fixed_.assign(nv, 0);
     for (std::size_t v = 0; v < std::min(nv, fixed.size()); ++v) fixed_[v] = fixed[v];
     tri_alive_.assign(nt, 1);
+    dirty_.assign(nv, 1);
     dev_ = o_.max_deviation > 0 ? o_.max_deviation : 0.25 * o_.voxel;
     has_box_ = o_.box.hi.x > o_.box.lo.x;
     mark_boundary_vertices();
@@ -163,6 +164,7 @@ class Improver {
   std::vector<Vec3> p_;
   std::vector<Tri> t_;
   std::vector<std::uint8_t> fixed_, boundary_, tri_alive_;
+  std::vector<std::uint8_t> dirty_;  // per vertex: its ring changed since the last move pass
   std::vector<std::uint32_t> inc_off_, inc_;  // vertex -> alive triangles (CSR)
 
   /// Largest |distance| estimate at seven points of triangle abc (centroid, edge midpoints, and
@@ -224,6 +226,12 @@ class Improver {
       }
       i = j;
     }
+  }
+
+  void mark_ring_dirty(std::uint32_t v) {
+    dirty_[v] = 1;
+    for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i)
+      for (auto u : t_[inc_[i]]) dirty_[u] = 1;
   }
 
   void build_incidence() {
@@ -331,6 +339,7 @@ class Improver {
     const auto mv = static_cast<std::uint32_t>(p_.size());
     p_.push_back(m);
     fixed_.push_back(0);
+    dirty_.push_back(1);
     boundary_.push_back(0);
     t_[t1] = {a, mv, x};
     t_[t2] = {b, mv, y};
@@ -403,6 +412,7 @@ class Improver {
         const double after = std::max(tri_error(pa, py, px), tri_error(pb, px, py));
         if (after > std::max(o_.max_error / kErrorSafety, before)) return;
       }
+      dirty_[a] = dirty_[b] = dirty_[x] = dirty_[y] = 1;
       t_[t1] = {a, y, x};
       t_[t2] = {b, x, y};
       touched[t1] = touched[t2] = 1;
@@ -443,6 +453,9 @@ class Improver {
     const double target = o_.target_angle_deg * kDeg;
     std::size_t moves = 0;
     for (std::uint32_t v = 0; v < p_.size(); ++v) {
+      // Only vertices whose neighbourhood changed since they were last looked at.
+      if (!dirty_[v]) continue;
+      dirty_[v] = 0;
       if (fixed_[v] || boundary_[v] || inc_off_[v + 1] == inc_off_[v]) continue;
       bool flipped = false;
       const Vec3 pv = p_[v];
@@ -476,6 +489,7 @@ class Improver {
         if (flipped || new_min < old_min + 0.1 * kDeg) continue;
         if (!ring_error_ok(v, q)) continue;
         p_[v] = q;
+        mark_ring_dirty(v);
         ++moves;
         break;
       }
@@ -520,6 +534,7 @@ class Improver {
       if (height > std::max(dev_, 0.25 * std::sqrt(norm(n)))) continue;
       std::uint32_t keep = inc_[inc_off_[v]];
       t_[keep] = {a, b, c};
+      dirty_[a] = dirty_[b] = dirty_[c] = 1;
       tri_alive_[inc_[inc_off_[v] + 1]] = tri_alive_[inc_[inc_off_[v] + 2]] = 0;
       busy[v] = busy[a] = busy[b] = busy[c] = 1;
       return true;
@@ -574,6 +589,9 @@ class Improver {
     if (must_improve ? new_min <= old_min : new_min < std::min(old_min, min_after)) return false;
     if (!ring_error_ok(a, q) || !ring_error_ok(b, q)) return false;
     p_[a] = q;
+    for (auto v : na_) dirty_[v] = 1;
+    for (auto v : nb_) dirty_[v] = 1;
+    dirty_[a] = 1;
     for (std::uint32_t i = inc_off_[b]; i < inc_off_[b + 1]; ++i) {
       Tri& u = t_[inc_[i]];
       if (u[0] == a || u[1] == a || u[2] == a) {
