@@ -59,7 +59,7 @@ struct ExtractOptions {
   /// Improve the shape of M0 before the blocks are built and of the output mesh (adaptive
   /// budgets; uniform levels are written as the hierarchy has them): edge flips, tangential moves
   /// with re-projection, needle collapses, all topology-preserving (improve.h). A triangle budget
-  /// below M0's size also decimates M0 first. The hierarchy keeps the improved M0; the output
+  /// above 3/4 of M0's size decimates M0 to 3/4 of the budget first. The hierarchy keeps the improved M0; the output
   /// mesh is improved after the cut (the .amh cut of the same budget is the mesh before).
   bool improve = true;
 
@@ -99,6 +99,7 @@ struct ExtractReport {
   bool refined = false;             ///< the fields below are set
   std::string chosen;               ///< the budget in CLI words ("--triangles 20000", ...)
   std::size_t triangle_cap = 0;     ///< Budget::automatic: marching cubes' triangle count
+  double max_error = 0;             ///< Budget::max_error: the bound (the final cut is measured)
   RefineStats refine;
   std::size_t triangles = 0, vertices = 0;  ///< of the output mesh
   int depth = 0;                    ///< deepest triangle level of the output mesh

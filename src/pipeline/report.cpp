@@ -164,6 +164,13 @@ std::string refine_summary(const ExtractReport& rep) {
     s << "; " << st.at_limit_leaves << " triangles above the error bound (stopped at a size limit"
       << (rep.triangle_cap > 0 ? " or the triangle cap)" : ")");
   }
+  if (!rep.levels.empty() && rep.levels.back().level == -1) {
+    const DistanceStats& d = rep.levels.back().error.distance;
+    s << "; measured distance to the surface: p99 " << d.p99 << ", max " << d.max;
+    if (rep.max_error > 0)
+      s << (d.p99 <= rep.max_error ? " (p99 within " : " (p99 ABOVE ") << "--max-error "
+        << rep.max_error << (d.p99 <= rep.max_error ? ")" : ": noise below the size limit h/2)");
+  }
   return s.str();
 }
 
