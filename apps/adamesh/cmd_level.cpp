@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "adamesh/error.h"
+#include "adamesh/improve.h"
 #include "adamesh/io.h"
 #include "adamesh/refine.h"
 #include "args.h"
@@ -19,6 +20,9 @@ int cmd_level(const Argv& argv) {
                       {"--all", false, "every split: the finest mesh"},
                       {"-o", true, "output mesh (.ply .obj .off .stl)"},
                       {"--partial", false, "accept a file cut short in its split list"},
+                      {"--improve", false,
+                       "shape improvement without the volume (flips within 0.25 voxel of the "
+                       "cut, tangential moves, needle collapses; docs/QUALITY.md)"},
                       {"--ascii", false, "ASCII PLY instead of binary"},
                       {"--quiet", false, "no summary line"},
                   });
@@ -56,6 +60,16 @@ int cmd_level(const Argv& argv) {
   } else {
     cut = extract_all(h);
     what = "all splits";
+  }
+  if (args.has("--improve")) {
+    // Without the volume: flips are judged against the cut's own surface, moves stay in the
+    // vertex's tangent plane; the triangle count is kept.
+    ImproveOptions io;
+    io.voxel = h.voxel;
+    io.box = h.bounds;
+    io.target_triangles = cut.mesh.num_triangles();
+    improve_mesh(cut.mesh, cut.vertex_border, nullptr, h.iso, io);
+    what += ", improved";
   }
   MeshWriteOptions wo;
   wo.ascii = args.has("--ascii");
