@@ -219,3 +219,35 @@ TEST(TopologyControl, MinCavityFillsSmallCavities) {
 
 }  // namespace
 }  // namespace adamesh
+
+namespace adamesh {
+namespace {
+
+// `level --improve`: a cut of the stored hierarchy improved without the volume keeps its count
+// (± 1) and topology and has fewer slivers than the plain cut.
+TEST(LevelImprove, KeepsCountAndTopologyAndRemovesSlivers) {
+  TempDir tmp;
+  const std::string head = testutil::source_dir() + "/data/ct_headsq/quarter.nhdr --iso 500.5";
+  ASSERT_EQ(run_cli("extract " + head + " --hierarchy " + tmp.file("h.amh") + " --quiet").exit_code, 0);
+  ASSERT_EQ(run_cli("level " + tmp.file("h.amh") + " --triangles 30000 -o " + tmp.file("a.ply") +
+                    " --quiet").exit_code, 0);
+  ASSERT_EQ(run_cli("level " + tmp.file("h.amh") + " --triangles 30000 --improve -o " +
+                    tmp.file("b.ply") + " --quiet").exit_code, 0);
+  const Mesh a = read_mesh(tmp.file("a.ply")), b = read_mesh(tmp.file("b.ply"));
+  EXPECT_LE(b.num_triangles(), a.num_triangles());
+  EXPECT_GE(b.num_triangles() + 1, a.num_triangles());
+  const auto ta = mesh_topo(a), tb = mesh_topo(b);
+  EXPECT_EQ(ta.chi, tb.chi);
+  EXPECT_EQ(ta.components, tb.components);
+  EXPECT_EQ(ta.boundary_loops, tb.boundary_loops);
+  auto pct = [&](const std::string& f) {
+    const auto s = run_cli("stats " + f + " --json");
+    return nlohmann::json::parse(s.out)["pct_min_angle_below"]["20"].get<double>();
+  };
+  const double before = pct(tmp.file("a.ply")), after = pct(tmp.file("b.ply"));
+  EXPECT_GT(before, 3.0);
+  EXPECT_LT(after, 1.0);
+}
+
+}  // namespace
+}  // namespace adamesh
