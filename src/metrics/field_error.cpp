@@ -124,6 +124,7 @@ FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double 
     // candidate is a point of the surface, so the result is an upper bound. With no candidate
     // the first-order distance is used. Both cases are counted in `unconverged`.
     constexpr double kFarFactor = 4, kSearch = 4;
+    constexpr int kShells = 24;
     std::atomic<std::int64_t> unconverged{0};
     auto dist = [&](const Vec3& p, const Vec3& normal) {
       const double f0 = mf.value(p) - iso;
@@ -152,6 +153,27 @@ FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double 
           best = std::min(best, line_crossing(p, e, f0, radius));
         }
         if (std::isfinite(best)) break;
+      }
+      if (std::isfinite(best)) return best;
+      // Still nothing (a thin feature the five lines miss, in a flat field): the nearest sign
+      // change on cubic shells of growing radius around p, refined along the segment to it.
+      const double step = std::max(0.5 * po.max_step, 1e-9 * cap);
+      for (int k = 1; k <= kShells && !std::isfinite(best); ++k) {
+        const double r = k * step;
+        for (int a = 0; a < 3; ++a)
+          for (const double side : {-1.0, 1.0})
+            for (int i = -k; i <= k; ++i)
+              for (int j = -k; j <= k; ++j) {
+                Vec3 q = p;
+                q[a] += side * r;
+                q[(a + 1) % 3] += i * step;
+                q[(a + 2) % 3] += j * step;
+                const double v = mf.value(q) - iso;
+                if (!std::isfinite(v) || ((v < 0) == (f0 < 0) && v != 0)) continue;
+                const Vec3 u = q - p;
+                const double len = norm(u);
+                best = std::min(best, line_crossing(p, u / len, f0, len * 1.0001));
+              }
       }
       return std::isfinite(best) ? best : sd;
     };
