@@ -191,4 +191,16 @@ InputOptions input_options_from(const Args& args) {
   return o;
 }
 
+OptionSpec compress_option_spec() {
+  return {"--compress", false, "glTF/GLB: EXT_meshopt_compression (lossless, needs a reader that knows it)"};
+}
+
+MeshWriteOptions mesh_output_options(const Args& args, const std::string& path) {
+  MeshWriteOptions wo;
+  wo.ascii = args.has("--ascii");
+  wo.compress = args.has("--compress");
+  mesh_format_for_writing(path, wo);
+  return wo;
+}
+
 }  // namespace adamesh::cli

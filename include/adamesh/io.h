@@ -1,5 +1,6 @@
 // File input and output: volumes (NRRD, MetaImage, NIfTI-1/2, VTK legacy and XML ImageData,
-// VolVis SLC, CCP4/MRC, headerless raw) and triangle meshes (PLY, OBJ, OFF, STL).
+// VolVis SLC, CCP4/MRC, headerless raw) and triangle meshes (PLY, OBJ, OFF, STL; glTF/GLB
+// written only).
 #pragma once
 
 #include <string>
@@ -20,16 +21,27 @@ Volume read_volume(const std::string& path, const RawOptions& raw = {});
 /// cannot be opened is judged by its extension alone). See docs/FORMATS.md.
 std::string volume_format_for(const std::string& path, const RawOptions& raw = {});
 
-enum class MeshFormat { automatic, ply, obj, off, stl };
+enum class MeshFormat { automatic, ply, obj, off, stl, glb, gltf };
 
 struct MeshWriteOptions {
   MeshFormat format = MeshFormat::automatic;  ///< automatic: from the extension
   bool ascii = false;                         ///< PLY: ASCII instead of binary little-endian
   bool write_normals = true;                  ///< when the mesh has normals
   bool write_attributes = true;               ///< PLY: per-vertex attributes as properties
+  /// glTF/GLB only: EXT_meshopt_compression (lossless meshopt codecs; the file then needs a
+  /// reader that knows the extension, e.g. three.js with MeshoptDecoder, Blender, gltfpack).
+  bool compress = false;
 };
 
-/// Writes atomically (temporary file + rename). Throws Error(output_failed, "<path>: ...").
+/// The format write_mesh() would use for `path` with `options` (from the extension when
+/// options.format is automatic). Call it before any computing to refuse a bad output name early.
+/// Throws Error(unsupported, "<path>: unknown mesh format (use ...)") for an unknown extension,
+/// or when options.compress is set for a format other than glTF/GLB.
+MeshFormat mesh_format_for_writing(const std::string& path, const MeshWriteOptions& options = {});
+
+/// Writes atomically (temporary file + rename); `.gltf` also writes its buffer to the same name
+/// with the extension `.bin`. Throws Error(output_failed, "<path>: ..."), or Error(unsupported)
+/// as mesh_format_for_writing() does.
 void write_mesh(const Mesh& mesh, const std::string& path, const MeshWriteOptions& options = {});
 
 /// Reads PLY (ASCII/binary), OBJ, OFF or STL (binary/ASCII; corners with identical positions
