@@ -10,6 +10,7 @@ pkgs=(
   zlib1g-dev            # gzip/zlib encodings in NRRD, MetaImage, NIfTI, VTK XML
   libpugixml-dev        # VTK XML ImageData (.vti) header
   libnifti2-dev         # NIfTI-1/NIfTI-2 header definitions and qform/sform conversion
+  libgdcm-dev           # DICOM series input (src/io/dicom.cpp)
   libmuparser-dev       # user expressions  expr:'...'
   libtbb-dev            # oneTBB: parallel stages
   libboost-graph-dev    # Edmonds maximum-cardinality matching (4-8 blocks)

@@ -146,6 +146,7 @@ std::vector<OptionSpec> input_option_specs() {
       {"--label", true,
        "label maps: the boundary of the voxels with this value (iso 0.5 of their 0/1 mask; "
        "`adamesh info` lists the labels)"},
+      {"--series", true, "DICOM directory with several series: the SeriesInstanceUID to read"},
   };
 }
 
@@ -188,6 +189,7 @@ InputOptions input_options_from(const Args& args) {
   o.nan_value = args.get_double("--nan-value");
   o.flip_inside = args.has("--flip");
   o.label = args.get_int("--label");
+  o.raw.dicom_series = args.get_or("--series", "");
   return o;
 }
 

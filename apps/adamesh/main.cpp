@@ -38,7 +38,7 @@ void print_help() {
     std::cout << "  " << name << c.summary << "\n";
   }
   std::cout << "\ninputs: a volume file (.nrrd .nhdr .mhd .mha .nii .nii.gz .vtk .vti .slc .mrc "
-               ".map .raw), shape:NAME or expr:'EXPR'\n";
+               ".map .raw), a DICOM series directory, shape:NAME or expr:'EXPR'\n";
 }
 
 }  // namespace

@@ -1,9 +1,10 @@
 // File input and output: volumes (NRRD, MetaImage, NIfTI-1/2, VTK legacy and XML ImageData,
-// VolVis SLC, CCP4/MRC, headerless raw) and triangle meshes (PLY, OBJ, OFF, STL; glTF/GLB
+// DICOM series, VolVis SLC, CCP4/MRC, headerless raw) and triangle meshes (PLY, OBJ, OFF, STL; glTF/GLB
 // written only).
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "adamesh/input.h"
 #include "adamesh/mesh.h"
@@ -12,9 +13,16 @@
 namespace adamesh {
 
 /// Reads a volume file; the format is chosen by extension and checked against the file's magic.
+/// A directory is read as a DICOM series (raw.dicom_series picks one when there are several).
 /// Raw files (`.raw` or any file when raw.dims is set) need raw.dims and raw.type.
 /// Throws Error(invalid_input | unsupported, "<path>: <problem>").
 Volume read_volume(const std::string& path, const RawOptions& raw = {});
+
+/// DICOM series from a list of files (any order; files that are not DICOM images are ignored):
+/// the series `series_uid`, or the only one. A directory (or one slice of the series) can also be
+/// given to read_volume(). Geometry and refusals: docs/FORMATS.md, "DICOM". Throws Error
+/// (invalid_input | unsupported | usage when several series need a choice).
+Volume read_dicom_series(const std::vector<std::string>& files, const std::string& series_uid = "");
 
 /// Name of the format read_volume() would use for `path` ("NRRD", "MetaImage", ...).
 /// Never throws: "" when neither the extension nor the file's magic is recognised (a file that
