@@ -16,6 +16,7 @@ const std::vector<Command>& commands() {
       {"level", "cut a mesh from a refinement hierarchy (.amh) without the volume", cmd_level},
       {"mc", "marching cubes mesh of an iso-surface (reference, manifold)", cmd_mc},
       {"stats", "topology, quality and error report of a mesh", cmd_stats},
+      {"view", "self-contained HTML viewer of a hierarchy (.amh) or mesh, with a level slider", cmd_view},
       {"version", "print the version", cmd_version},
   };
   return table;
