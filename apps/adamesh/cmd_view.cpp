@@ -102,6 +102,7 @@ input[type=range] { width: 100%; }
 #legend { color: #555; font-size: 12px; min-height: 1em; }
 table { border-collapse: collapse; margin-top: 10px; font-size: 12px; width: 100%; }
 th, td { text-align: left; padding: 2px 4px; border-bottom: 1px solid #eee; vertical-align: top; }
+td { overflow-wrap: anywhere; }
 .levels td, .levels th { text-align: right; }
 .note { color: #666; font-size: 12px; margin-top: 10px; }
 </style></head>
