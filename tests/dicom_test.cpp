@@ -1,10 +1,12 @@
 // DICOM series input: series are written here with GDCM (gdcm::ImageWriter, CT Image Storage)
 // from real volumes placed in several orientations, in shuffled file order, and read back with
 // read_volume(directory): dims, spacing, origin, direction and every sample must match the
-// source. Rescale slope/intercept, several series in one directory, gantry tilt, uneven spacing
+// source, uncompressed and in four lossless compressed transfer syntaxes. Rescale slope/intercept, several series in one directory, gantry tilt, uneven spacing
 // and the CLI are covered too.
 #include <gdcmAttribute.h>
 #include <gdcmImage.h>
+#include <gdcmImageChangeTransferSyntax.h>
+#include <gdcmImageReader.h>
 #include <gdcmImageWriter.h>
 #include <gdcmReader.h>
 #include <gdcmTrace.h>
@@ -36,6 +38,8 @@ struct SeriesOptions {
   std::string description = "test series";
   int skip_slice = -1;              ///< leave this slice out (uneven spacing)
   unsigned seed = 1;                ///< file order
+  /// Pixel data encoding; TS_END: as ImageWriter writes it (uncompressed).
+  gdcm::TransferSyntax::TSType syntax = gdcm::TransferSyntax::TS_END;
 };
 
 /// Writes `v` (direction right-handed, unit columns) as one CT file per k-slice in `dir`.
@@ -101,6 +105,20 @@ std::string write_series(const Volume& v, const std::string& dir, const SeriesOp
     const std::string name = dir + "/IM" + std::to_string(o.seed) + "_" + std::to_string(1000 + n);
     w.SetFileName(name.c_str());
     if (!w.Write()) throw std::runtime_error("gdcm could not write a slice");
+    if (o.syntax != gdcm::TransferSyntax::TS_END) {  // compress the pixel data
+      gdcm::ImageReader ir;
+      ir.SetFileName(name.c_str());
+      if (!ir.Read()) throw std::runtime_error("gdcm could not read a slice back");
+      gdcm::ImageChangeTransferSyntax change;
+      change.SetTransferSyntax(o.syntax);
+      change.SetInput(ir.GetImage());
+      if (!change.Change()) throw std::runtime_error("gdcm could not change the transfer syntax");
+      gdcm::ImageWriter cw;
+      cw.SetFile(ir.GetFile());
+      cw.SetImage(change.GetOutput());
+      cw.SetFileName(name.c_str());
+      if (!cw.Write()) throw std::runtime_error("gdcm could not write a compressed slice");
+    }
     // ImageWriter keeps only x, y of a 2-D image's origin: set ImagePositionPatient afterwards.
     gdcm::Reader rd;
     rd.SetFileName(name.c_str());
@@ -168,6 +186,28 @@ TEST(Dicom, SeriesInSeveralOrientationsReadsBackWithTheSourceGeometry) {
     EXPECT_EQ(got.type, ScalarType::i16);
     expect_same_geometry_and_samples(got, src);
     ++n;
+  }
+}
+
+TEST(Dicom, CompressedTransferSyntaxes) {
+  TempDir tmp;
+  Volume src = head();
+  src.grid.direction = rotation({1, 0, 1}, 0.3);
+  src.grid.origin = {5, -7, 11};
+  using TS = gdcm::TransferSyntax;
+  for (const auto& [name, ts] : {std::pair<std::string, TS::TSType>{"rle", TS::RLELossless},
+                                 {"jpeg_lossless", TS::JPEGLosslessProcess14_1},
+                                 {"jpegls", TS::JPEGLSLossless},
+                                 {"j2k", TS::JPEG2000Lossless}}) {
+    SCOPED_TRACE(name);
+    write_series(src, tmp.file(name), {.intercept = -1024, .unsigned16 = true, .syntax = ts});
+    // The files really are encapsulated in that syntax.
+    gdcm::Reader rd;
+    const std::string any = fs::directory_iterator(tmp.file(name))->path().string();
+    rd.SetFileName(any.c_str());
+    ASSERT_TRUE(rd.Read());
+    EXPECT_EQ(rd.GetFile().GetHeader().GetDataSetTransferSyntax(), ts);
+    expect_same_geometry_and_samples(read_volume(tmp.file(name)), src);
   }
 }
 
