@@ -1,8 +1,9 @@
 // DICOM series input: series are written here with GDCM (gdcm::ImageWriter, CT Image Storage)
 // from real volumes placed in several orientations, in shuffled file order, and read back with
 // read_volume(directory): dims, spacing, origin, direction and every sample must match the
-// source, uncompressed and in four lossless compressed transfer syntaxes. Rescale slope/intercept, several series in one directory, gantry tilt, uneven spacing
-// and the CLI are covered too.
+// source, uncompressed and in four lossless compressed transfer syntaxes. Rescale
+// slope/intercept, several series in one directory, gantry tilt, uneven spacing and the CLI are
+// covered too.
 #include <gdcmAttribute.h>
 #include <gdcmImage.h>
 #include <gdcmImageChangeTransferSyntax.h>
@@ -36,8 +37,8 @@ struct SeriesOptions {
   Vec3 tilt{};                      ///< added to ImagePositionPatient per slice (gantry tilt)
   std::string series_uid;           ///< generated when empty
   std::string description = "test series";
-  int skip_slice = -1;              ///< leave this slice out (uneven spacing)
-  unsigned seed = 1;                ///< file order
+  int skip_slice = -1;  ///< leave this slice out (uneven spacing)
+  unsigned seed = 1;    ///< file order
   /// Pixel data encoding; TS_END: as ImageWriter writes it (uncompressed).
   gdcm::TransferSyntax::TSType syntax = gdcm::TransferSyntax::TS_END;
 };
@@ -79,12 +80,18 @@ std::string write_series(const Volume& v, const std::string& dir, const SeriesOp
     for (std::int64_t j = 0; j < d[1]; ++j)
       for (std::int64_t i = 0; i < d[0]; ++i) {
         const double stored = std::round((v.at(i, j, k) - o.intercept) / o.slope);
-        if (o.unsigned16) u16.push_back(static_cast<std::uint16_t>(stored));
-        else s16.push_back(static_cast<std::int16_t>(stored));
+        if (o.unsigned16)
+          u16.push_back(static_cast<std::uint16_t>(stored));
+        else
+          s16.push_back(static_cast<std::int16_t>(stored));
       }
     gdcm::DataElement pixels(gdcm::Tag(0x7fe0, 0x0010));
-    if (o.unsigned16) pixels.SetByteValue(reinterpret_cast<const char*>(u16.data()), static_cast<std::uint32_t>(2 * u16.size()));
-    else pixels.SetByteValue(reinterpret_cast<const char*>(s16.data()), static_cast<std::uint32_t>(2 * s16.size()));
+    if (o.unsigned16)
+      pixels.SetByteValue(reinterpret_cast<const char*>(u16.data()),
+                          static_cast<std::uint32_t>(2 * u16.size()));
+    else
+      pixels.SetByteValue(reinterpret_cast<const char*>(s16.data()),
+                          static_cast<std::uint32_t>(2 * s16.size()));
     img.SetDataElement(pixels);
     gdcm::DataSet& ds = w.GetFile().GetDataSet();
     auto put = [&](std::uint16_t g, std::uint16_t e, const std::string& value, gdcm::VR vr) {
@@ -144,9 +151,12 @@ Volume head() { return read_volume(testutil::source_dir() + "/data/ct_headsq/qua
 Mat3 rotation(Vec3 axis, double angle) {
   axis = normalized(axis);
   const double c = std::cos(angle), s = std::sin(angle), t = 1 - c;
-  const Vec3 x = {t * axis.x * axis.x + c, t * axis.x * axis.y + s * axis.z, t * axis.x * axis.z - s * axis.y};
-  const Vec3 y = {t * axis.x * axis.y - s * axis.z, t * axis.y * axis.y + c, t * axis.y * axis.z + s * axis.x};
-  const Vec3 z = {t * axis.x * axis.z + s * axis.y, t * axis.y * axis.z - s * axis.x, t * axis.z * axis.z + c};
+  const Vec3 x = {t * axis.x * axis.x + c, t * axis.x * axis.y + s * axis.z,
+                  t * axis.x * axis.z - s * axis.y};
+  const Vec3 y = {t * axis.x * axis.y - s * axis.z, t * axis.y * axis.y + c,
+                  t * axis.y * axis.z + s * axis.x};
+  const Vec3 z = {t * axis.x * axis.z + s * axis.y, t * axis.y * axis.z - s * axis.x,
+                  t * axis.z * axis.z + c};
   return Mat3::from_columns(x, y, z);
 }
 
@@ -156,7 +166,8 @@ void expect_same_geometry_and_samples(const Volume& a, const Volume& b) {
     EXPECT_NEAR(a.grid.spacing[k], b.grid.spacing[k], 1e-5 * b.grid.spacing[k]) << "spacing " << k;
     EXPECT_NEAR(a.grid.origin[k], b.grid.origin[k], 1e-4) << "origin " << k;
     for (int l = 0; l < 3; ++l)
-      EXPECT_NEAR(a.grid.direction.m[k][l], b.grid.direction.m[k][l], 1e-5) << "direction " << k << l;
+      EXPECT_NEAR(a.grid.direction.m[k][l], b.grid.direction.m[k][l], 1e-5)
+          << "direction " << k << l;
   }
   std::int64_t differ = 0;
   for (std::int64_t i = 0; i < b.grid.num_samples(); ++i) differ += a.at(i) != b.at(i);
@@ -278,7 +289,8 @@ TEST(Dicom, GantryTiltAndUnevenSpacingAreRefused) {
   const Volume src = head();
   write_series(src, tmp.file("tilt"), {.tilt = {0, 0.4, 0}});
   write_series(src, tmp.file("gap"), {.skip_slice = 40});
-  for (const auto& [name, what] : {std::pair<std::string, std::string>{"tilt", "gantry tilt"}, {"gap", "uneven slice spacing"}}) {
+  for (const auto& [name, what] : {std::pair<std::string, std::string>{"tilt", "gantry tilt"},
+                                   {"gap", "uneven slice spacing"}}) {
     try {
       read_volume(tmp.file(name));
       ADD_FAILURE() << name << " accepted";

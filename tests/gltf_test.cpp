@@ -96,7 +96,8 @@ std::string view_bytes(const Parsed& p, int i) {
     const json& e = bv["extensions"]["EXT_meshopt_compression"];
     EXPECT_EQ(e["buffer"].get<int>(), 0);
     const std::size_t count = e["count"], stride = e["byteStride"];
-    const std::string src = p.bin.substr(e["byteOffset"].get<std::size_t>(), e["byteLength"].get<std::size_t>());
+    const std::string src =
+        p.bin.substr(e["byteOffset"].get<std::size_t>(), e["byteLength"].get<std::size_t>());
     std::string out(count * stride, '\0');
     const auto* in = reinterpret_cast<const unsigned char*>(src.data());
     int rc = -1;
@@ -157,12 +158,14 @@ void check_against(const Parsed& p, const Mesh& m, bool compressed) {
   std::vector<float> n(m.positions.size());
   std::memcpy(n.data(), nb.data(), nb.size());
   for (std::size_t v = 0; v < m.num_vertices(); ++v) {
-    const double len = std::sqrt(n[3 * v] * n[3 * v] + n[3 * v + 1] * n[3 * v + 1] + n[3 * v + 2] * n[3 * v + 2]);
+    const double len =
+        std::sqrt(n[3 * v] * n[3 * v] + n[3 * v + 1] * n[3 * v + 1] + n[3 * v + 2] * n[3 * v + 2]);
     EXPECT_NEAR(len, 1.0, 1e-6) << "vertex " << v;
     if (!m.normals.empty()) {  // same direction as the mesh's normal
       const double dot = (n[3 * v] * m.normals[3 * v] + n[3 * v + 1] * m.normals[3 * v + 1] +
                           n[3 * v + 2] * m.normals[3 * v + 2]);
-      const double ml = std::sqrt(m.normals[3 * v] * m.normals[3 * v] + m.normals[3 * v + 1] * m.normals[3 * v + 1] +
+      const double ml = std::sqrt(m.normals[3 * v] * m.normals[3 * v] +
+                                  m.normals[3 * v + 1] * m.normals[3 * v + 1] +
                                   m.normals[3 * v + 2] * m.normals[3 * v + 2]);
       EXPECT_NEAR(dot / ml, 1.0, 1e-6);
     }
@@ -177,7 +180,8 @@ void check_against(const Parsed& p, const Mesh& m, bool compressed) {
     EXPECT_FALSE(d["buffers"][1].contains("uri"));
     for (const json& bv : d["bufferViews"]) {
       EXPECT_EQ(bv["buffer"], 1);
-      EXPECT_EQ(bv["extensions"]["EXT_meshopt_compression"]["byteOffset"].get<std::size_t>() % 4, 0u);
+      EXPECT_EQ(bv["extensions"]["EXT_meshopt_compression"]["byteOffset"].get<std::size_t>() % 4,
+                0u);
     }
   }
 }
@@ -215,7 +219,8 @@ TEST(Gltf, MeshoptCompressionDecodesToTheSameBytes) {
   write_mesh(m, tmp.file("u.glb"));
   const std::string c = read_bytes(tmp.file("c.glb"));
   check_against(parse_glb(c), m, true);
-  EXPECT_LT(c.size(), read_bytes(tmp.file("u.glb")).size() * 3 / 4) << "compression did not compress";
+  EXPECT_LT(c.size(), read_bytes(tmp.file("u.glb")).size() * 3 / 4)
+      << "compression did not compress";
 }
 
 TEST(Gltf, GltfWritesItsBinNextToIt) {

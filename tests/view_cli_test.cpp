@@ -27,7 +27,8 @@ std::string unbase64(const std::string& s) {
   std::string out;
   for (std::size_t i = 0; i + 3 < s.size(); i += 4) {
     const std::uint32_t n = (val(s[i]) << 18) | (val(s[i + 1]) << 12) |
-                            ((s[i + 2] == '=' ? 0 : val(s[i + 2])) << 6) | (s[i + 3] == '=' ? 0 : val(s[i + 3]));
+                            ((s[i + 2] == '=' ? 0 : val(s[i + 2])) << 6) |
+                            (s[i + 3] == '=' ? 0 : val(s[i + 3]));
     out.push_back(static_cast<char>(n >> 16));
     if (s[i + 2] != '=') out.push_back(static_cast<char>((n >> 8) & 255));
     if (s[i + 3] != '=') out.push_back(static_cast<char>(n & 255));
@@ -78,12 +79,14 @@ TEST(ViewCli, HierarchyPageIsSelfContainedAndHoldsTheSplitList) {
   auto r = run_cli("extract '" + head + "' --iso 500.5 --quiet --triangles 12000 --hierarchy " +
                    tmp.file("h.amh") + " --report " + tmp.file("r.json"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  r = run_cli("view " + tmp.file("h.amh") + " -o " + tmp.file("v.html") + " --report " + tmp.file("r.json"));
+  r = run_cli("view " + tmp.file("h.amh") + " -o " + tmp.file("v.html") + " --report " +
+              tmp.file("r.json"));
   if (!viewer_built(r)) GTEST_SKIP() << "built without the viewer bundle: " << r.err;
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string html = read_bytes(tmp.file("v.html"));
   for (const char* external : {"<script src", "<link", "https://cdn", "import(", "fetch("})
-    EXPECT_EQ(html.find(external), std::string::npos) << "page refers to something outside: " << external;
+    EXPECT_EQ(html.find(external), std::string::npos)
+        << "page refers to something outside: " << external;
   const nlohmann::json d = page_data(html);
   EXPECT_EQ(d["kind"], "hierarchy");
   EXPECT_TRUE(d["report"].is_object());

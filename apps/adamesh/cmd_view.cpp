@@ -44,8 +44,8 @@ std::string base64(const std::string& in) {
   out.reserve((in.size() + 2) / 3 * 4);
   std::size_t i = 0;
   for (; i + 2 < in.size(); i += 3) {
-    const auto n = (std::uint32_t(std::uint8_t(in[i])) << 16) | (std::uint32_t(std::uint8_t(in[i + 1])) << 8) |
-                   std::uint8_t(in[i + 2]);
+    const auto n = (std::uint32_t(std::uint8_t(in[i])) << 16) |
+                   (std::uint32_t(std::uint8_t(in[i + 1])) << 8) | std::uint8_t(in[i + 2]);
     for (int s = 18; s >= 0; s -= 6) out.push_back(abc[(n >> s) & 63]);
   }
   if (i < in.size()) {
@@ -74,11 +74,20 @@ std::string html_escape(const std::string& s) {
   std::string out;
   for (char c : s) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out.push_back(c);
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out.push_back(c);
     }
   }
   return out;
@@ -131,18 +140,21 @@ const char* kPageControls = R"(</h1>
 }  // namespace
 
 int cmd_view(const Argv& argv) {
-  const Args args("view", argv,
-                  {
-                      {"-o", true, "output page (.html), self-contained"},
-                      {"--report", true, "JSON report of adamesh extract --report: figures shown in the page"},
-                      {"--partial", false, ".amh: accept a file cut short in its split list"},
-                      {"--quiet", false, "no summary line"},
-                  });
+  const Args args(
+      "view", argv,
+      {
+          {"-o", true, "output page (.html), self-contained"},
+          {"--report", true, "JSON report of adamesh extract --report: figures shown in the page"},
+          {"--partial", false, ".amh: accept a file cut short in its split list"},
+          {"--quiet", false, "no summary line"},
+      });
   if (args.help_requested()) {
-    std::cout << args.usage("FILE.amh|MESH -o view.html [--report report.json]")
-              << "\nOne HTML file with the mesh, orbit controls, wireframe and colouring by triangle quality;\n"
-                 "for a hierarchy (.amh) a slider over its split prefixes and uniform levels (cuts are\n"
-                 "computed in the page from the split list) and colouring by distance bound.\n";
+    std::cout
+        << args.usage("FILE.amh|MESH -o view.html [--report report.json]")
+        << "\nOne HTML file with the mesh, orbit controls, wireframe and colouring by triangle "
+           "quality;\n"
+           "for a hierarchy (.amh) a slider over its split prefixes and uniform levels (cuts are\n"
+           "computed in the page from the split list) and colouring by distance bound.\n";
     return 0;
   }
   args.expect_positionals(1, 1, "FILE.amh|MESH");
@@ -152,13 +164,15 @@ int cmd_view(const Argv& argv) {
     std::string ext = out->size() >= 5 ? out->substr(out->size() - 5) : "";
     for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     if (ext != ".html" && (ext.size() < 4 || ext.substr(1) != ".htm"))
-      fail(Status::unsupported, *out + ": adamesh view writes an HTML page (use the extension .html)");
+      fail(Status::unsupported,
+           *out + ": adamesh view writes an HTML page (use the extension .html)");
   }
   const std::string_view bundle = viewer_bundle();
   if (bundle.empty())
     fail(Status::unsupported,
          "adamesh view: this build has no viewer (the npm packages three and esbuild were not "
-         "installed when it was built: run scripts/install-deps.sh with network access, then rebuild)");
+         "installed when it was built: run scripts/install-deps.sh with network access, then "
+         "rebuild)");
 
   const std::string path = args.positionals()[0];
   nlohmann::json data;
@@ -170,12 +184,14 @@ int cmd_view(const Argv& argv) {
     HierarchyReadOptions ro;
     ro.allow_partial = args.has("--partial");
     const Hierarchy h = read_hierarchy(path, ro);
-    const std::size_t v0 = h.base_positions.size(), f0 = h.base_triangles.size(), ns = h.splits.size();
+    const std::size_t v0 = h.base_positions.size(), f0 = h.base_triangles.size(),
+                      ns = h.splits.size();
     std::vector<float> pos;
     pos.reserve(3 * (v0 + ns));
     for (std::size_t v = 0; v < v0 + ns; ++v) {
       const Vec3 p = h.vertex(v);
-      pos.insert(pos.end(), {static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)});
+      pos.insert(pos.end(),
+                 {static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)});
     }
     std::vector<std::uint32_t> base;
     for (const auto& t : h.base_triangles) base.insert(base.end(), t.begin(), t.end());
@@ -218,7 +234,8 @@ int cmd_view(const Argv& argv) {
     if (!data["report"].is_object()) fail_input(*r, "not a JSON report (expected an object)");
   }
   std::string name = path;
-  if (const auto slash = name.find_last_of('/'); slash != std::string::npos) name = name.substr(slash + 1);
+  if (const auto slash = name.find_last_of('/'); slash != std::string::npos)
+    name = name.substr(slash + 1);
 
   write_file_atomically(*out, [&](std::ostream& os) {
     os << kPageHead << html_escape(name) << " — adamesh view" << kPageBody << html_escape(name)
@@ -228,7 +245,8 @@ int cmd_view(const Argv& argv) {
   });
   if (!args.has("--quiet"))
     std::cout << "view: " << path << " (" << summary << ") -> " << *out << "\n"
-              << "open it in a browser: file://" << std::filesystem::absolute(*out).string() << "\n";
+              << "open it in a browser: file://" << std::filesystem::absolute(*out).string()
+              << "\n";
   return 0;
 }
 

@@ -94,9 +94,11 @@ Volume read_dicom_series(const std::vector<std::string>& files, const std::strin
   if (!scanner.Scan(files)) fail_input(where, "cannot scan the DICOM files");
   std::map<std::string, std::vector<std::string>> series;  // uid -> files
   for (const std::string& f : files)
-    if (scanner.IsKey(f.c_str())) series[trimmed(scanner.GetValue(f.c_str(), kSeriesUid))].push_back(f);
+    if (scanner.IsKey(f.c_str()))
+      series[trimmed(scanner.GetValue(f.c_str(), kSeriesUid))].push_back(f);
   if (series.empty())
-    fail_input(where, "no DICOM image files (" + std::to_string(files.size()) + " files looked at)");
+    fail_input(where,
+               "no DICOM image files (" + std::to_string(files.size()) + " files looked at)");
 
   std::string uid = series_uid;
   if (uid.empty()) {
@@ -115,11 +117,13 @@ Volume read_dicom_series(const std::vector<std::string>& files, const std::strin
   } else if (!series.count(uid)) {
     std::string list;
     for (const auto& s : series) list += " " + s.first;
-    fail(Status::usage, where + ": no DICOM series with UID " + uid + " (series here:" + list + ")");
+    fail(Status::usage,
+         where + ": no DICOM series with UID " + uid + " (series here:" + list + ")");
   }
   const std::vector<std::string>& names = series[uid];
   if (names.size() < 2)
-    fail(Status::unsupported, where + ": DICOM series " + uid + " has a single slice: a volume needs at least 2");
+    fail(Status::unsupported,
+         where + ": DICOM series " + uid + " has a single slice: a volume needs at least 2");
 
   // Geometry from the headers: every slice must share orientation, size and pixel spacing.
   const std::string f0 = names.front();
@@ -129,23 +133,29 @@ Volume read_dicom_series(const std::vector<std::string>& files, const std::strin
   if (ps.size() != 2 || !(ps[0] > 0) || !(ps[1] > 0))
     fail_input(f0, "missing or invalid PixelSpacing (0028,0030)");
   const Vec3 row{iop[0], iop[1], iop[2]}, col{iop[3], iop[4], iop[5]};
-  if (std::abs(norm(row) - 1) > 1e-3 || std::abs(norm(col) - 1) > 1e-3 || std::abs(dot(row, col)) > 1e-3)
+  if (std::abs(norm(row) - 1) > 1e-3 || std::abs(norm(col) - 1) > 1e-3 ||
+      std::abs(dot(row, col)) > 1e-3)
     fail_input(f0, "ImageOrientationPatient is not two orthogonal unit vectors");
   const Vec3 r = normalized(row), c = normalized(col), n = normalized(cross(row, col));
   std::vector<Slice> slices;
   for (const std::string& f : names) {
     const char* fc = f.c_str();
-    if (trimmed(scanner.GetValue(fc, kOrientation)) != trimmed(scanner.GetValue(f0.c_str(), kOrientation))) {
+    if (trimmed(scanner.GetValue(fc, kOrientation)) !=
+        trimmed(scanner.GetValue(f0.c_str(), kOrientation))) {
       const std::vector<double> o = numbers(trimmed(scanner.GetValue(fc, kOrientation)));
       double diff = o.size() == 6 ? 0 : 1;
-      for (std::size_t i = 0; i < o.size() && i < 6; ++i) diff = std::max(diff, std::abs(o[i] - iop[i]));
-      if (diff > 1e-4) fail(Status::unsupported, f + ": ImageOrientationPatient differs from " + f0 + " (slices in several orientations)");
+      for (std::size_t i = 0; i < o.size() && i < 6; ++i)
+        diff = std::max(diff, std::abs(o[i] - iop[i]));
+      if (diff > 1e-4)
+        fail(Status::unsupported, f + ": ImageOrientationPatient differs from " + f0 +
+                                      " (slices in several orientations)");
     }
     if (trimmed(scanner.GetValue(fc, kRows)) != trimmed(scanner.GetValue(f0.c_str(), kRows)) ||
         trimmed(scanner.GetValue(fc, kColumns)) != trimmed(scanner.GetValue(f0.c_str(), kColumns)))
       fail(Status::unsupported, f + ": slice size differs from " + f0);
     const std::vector<double> p2 = numbers(trimmed(scanner.GetValue(fc, kPixelSpacing)));
-    if (p2.size() != 2 || std::abs(p2[0] - ps[0]) > 1e-4 * ps[0] || std::abs(p2[1] - ps[1]) > 1e-4 * ps[1])
+    if (p2.size() != 2 || std::abs(p2[0] - ps[0]) > 1e-4 * ps[0] ||
+        std::abs(p2[1] - ps[1]) > 1e-4 * ps[1])
       fail(Status::unsupported, f + ": PixelSpacing differs from " + f0);
     const std::string frames = trimmed(scanner.GetValue(fc, kFrames));
     if (!frames.empty() && frames != "1")
@@ -156,25 +166,30 @@ Volume read_dicom_series(const std::vector<std::string>& files, const std::strin
     s.along = dot(s.position, n);
     slices.push_back(s);
   }
-  std::sort(slices.begin(), slices.end(), [](const Slice& a, const Slice& b) { return a.along < b.along; });
+  std::sort(slices.begin(), slices.end(),
+            [](const Slice& a, const Slice& b) { return a.along < b.along; });
   const std::size_t nz = slices.size();
   const double dz = (slices.back().along - slices.front().along) / static_cast<double>(nz - 1);
   for (std::size_t k = 1; k < nz; ++k) {
     const double step = slices[k].along - slices[k - 1].along;
     if (step < 1e-6 * std::max(1.0, std::abs(dz)))
-      fail(Status::unsupported, where + ": two slices at the same position (" + slices[k - 1].file + ", " +
-                                    slices[k].file + "): several acquisitions, echoes or time points in one series");
+      fail(Status::unsupported, where + ": two slices at the same position (" + slices[k - 1].file +
+                                    ", " + slices[k].file +
+                                    "): several acquisitions, echoes or time points in one series");
     if (std::abs(step - dz) > 0.01 * dz + 1e-4)
-      fail(Status::unsupported, where + ": uneven slice spacing: " + std::to_string(step) + " mm between " +
-                                    slices[k - 1].file + " and " + slices[k].file + ", " + std::to_string(dz) +
+      fail(Status::unsupported, where + ": uneven slice spacing: " + std::to_string(step) +
+                                    " mm between " + slices[k - 1].file + " and " + slices[k].file +
+                                    ", " + std::to_string(dz) +
                                     " mm on average (missing slices?); not resampled");
     // Gantry tilt: the slice origins must move along the normal only.
     const Vec3 d = slices[k].position - slices[0].position;
     const Vec3 lateral = d - n * dot(d, n);
     if (norm(lateral) > 0.01 * std::min({ps[0], ps[1], dz}) * static_cast<double>(k) + 1e-3)
-      fail(Status::unsupported, where + ": slice positions are not along the slice normal (gantry tilt or "
-                                    "sheared series, offset " + std::to_string(norm(lateral)) + " mm at " +
-                                    slices[k].file + "); not resampled");
+      fail(Status::unsupported,
+           where +
+               ": slice positions are not along the slice normal (gantry tilt or "
+               "sheared series, offset " +
+               std::to_string(norm(lateral)) + " mm at " + slices[k].file + "); not resampled");
   }
 
   // Pixels: read every slice, then choose the output type from the rescaled range.
@@ -188,7 +203,9 @@ Volume read_dicom_series(const std::vector<std::string>& files, const std::strin
   for (std::size_t k = 0; k < nz; ++k) {
     gdcm::ImageReader reader;
     reader.SetFileName(slices[k].file.c_str());
-    if (!reader.Read()) fail_input(slices[k].file, "GDCM cannot read the image (corrupt file or unsupported transfer syntax)");
+    if (!reader.Read())
+      fail_input(slices[k].file,
+                 "GDCM cannot read the image (corrupt file or unsupported transfer syntax)");
     const gdcm::Image& img = reader.GetImage();
     const unsigned int* dim = img.GetDimensions();
     if (img.GetNumberOfDimensions() == 3 && dim[2] != 1)
@@ -197,13 +214,16 @@ Volume read_dicom_series(const std::vector<std::string>& files, const std::strin
     if (pf.GetSamplesPerPixel() != 1)
       fail(Status::unsupported, slices[k].file + ": colour DICOM images are not supported");
     if (k == 0) size = {dim[0], dim[1]};
-    if (dim[0] != size[0] || dim[1] != size[1]) fail(Status::unsupported, slices[k].file + ": slice size differs");
+    if (dim[0] != size[0] || dim[1] != size[1])
+      fail(Status::unsupported, slices[k].file + ": slice size differs");
     if (pf.GetScalarType() == gdcm::PixelFormat::UNKNOWN || pf.GetBitsAllocated() > 32 ||
         pf.GetBitsAllocated() % 8 != 0)
-      fail(Status::unsupported, slices[k].file + ": pixel format with " + std::to_string(pf.GetBitsAllocated()) +
+      fail(Status::unsupported, slices[k].file + ": pixel format with " +
+                                    std::to_string(pf.GetBitsAllocated()) +
                                     " bits allocated is not supported");
     buffers[k].resize(img.GetBufferLength());
-    if (!img.GetBuffer(buffers[k].data())) fail_input(slices[k].file, "cannot decode the pixel data");
+    if (!img.GetBuffer(buffers[k].data()))
+      fail_input(slices[k].file, "cannot decode the pixel data");
     const std::size_t bytes = pf.GetPixelSize();
     if (buffers[k].size() < static_cast<std::size_t>(size[0] * size[1]) * bytes)
       fail_input(slices[k].file, "pixel data shorter than the image size");
@@ -227,24 +247,45 @@ Volume read_dicom_series(const std::vector<std::string>& files, const std::strin
       }
     };
     switch (pf.GetScalarType()) {
-      case gdcm::PixelFormat::UINT8: range(std::uint8_t{}); break;
-      case gdcm::PixelFormat::INT8: range(std::int8_t{}); break;
-      case gdcm::PixelFormat::UINT16: range(std::uint16_t{}); break;
-      case gdcm::PixelFormat::INT16: range(std::int16_t{}); break;
-      case gdcm::PixelFormat::UINT32: range(std::uint32_t{}); break;
-      case gdcm::PixelFormat::INT32: range(std::int32_t{}); break;
-      case gdcm::PixelFormat::FLOAT32: range(float{}); break;
-      case gdcm::PixelFormat::FLOAT64: range(double{}); break;
+      case gdcm::PixelFormat::UINT8:
+        range(std::uint8_t{});
+        break;
+      case gdcm::PixelFormat::INT8:
+        range(std::int8_t{});
+        break;
+      case gdcm::PixelFormat::UINT16:
+        range(std::uint16_t{});
+        break;
+      case gdcm::PixelFormat::INT16:
+        range(std::int16_t{});
+        break;
+      case gdcm::PixelFormat::UINT32:
+        range(std::uint32_t{});
+        break;
+      case gdcm::PixelFormat::INT32:
+        range(std::int32_t{});
+        break;
+      case gdcm::PixelFormat::FLOAT32:
+        range(float{});
+        break;
+      case gdcm::PixelFormat::FLOAT64:
+        range(double{});
+        break;
       default:
-        fail(Status::unsupported, slices[k].file + ": unsupported pixel type " + pf.GetScalarTypeAsString());
+        fail(Status::unsupported,
+             slices[k].file + ": unsupported pixel type " + pf.GetScalarTypeAsString());
     }
   }
   ScalarType type = ScalarType::f32;
   if (integral) {
-    if (lo >= 0 && hi <= 255) type = ScalarType::u8;
-    else if (lo >= -32768 && hi <= 32767) type = ScalarType::i16;
-    else if (lo >= 0 && hi <= 65535) type = ScalarType::u16;
-    else if (lo >= -2147483648.0 && hi <= 2147483647.0) type = ScalarType::i32;
+    if (lo >= 0 && hi <= 255)
+      type = ScalarType::u8;
+    else if (lo >= -32768 && hi <= 32767)
+      type = ScalarType::i16;
+    else if (lo >= 0 && hi <= 65535)
+      type = ScalarType::u16;
+    else if (lo >= -2147483648.0 && hi <= 2147483647.0)
+      type = ScalarType::i32;
   }
 
   grid.dims = {size[0], size[1], static_cast<std::int64_t>(nz)};
@@ -273,15 +314,32 @@ Volume read_dicom_series(const std::vector<std::string>& files, const std::strin
         }
       };
       switch (pf.GetScalarType()) {
-        case gdcm::PixelFormat::UINT8: convert(std::uint8_t{}); break;
-        case gdcm::PixelFormat::INT8: convert(std::int8_t{}); break;
-        case gdcm::PixelFormat::UINT16: convert(std::uint16_t{}); break;
-        case gdcm::PixelFormat::INT16: convert(std::int16_t{}); break;
-        case gdcm::PixelFormat::UINT32: convert(std::uint32_t{}); break;
-        case gdcm::PixelFormat::INT32: convert(std::int32_t{}); break;
-        case gdcm::PixelFormat::FLOAT32: convert(float{}); break;
-        case gdcm::PixelFormat::FLOAT64: convert(double{}); break;
-        default: fail(Status::unsupported, slices[k].file + ": unsupported pixel type");
+        case gdcm::PixelFormat::UINT8:
+          convert(std::uint8_t{});
+          break;
+        case gdcm::PixelFormat::INT8:
+          convert(std::int8_t{});
+          break;
+        case gdcm::PixelFormat::UINT16:
+          convert(std::uint16_t{});
+          break;
+        case gdcm::PixelFormat::INT16:
+          convert(std::int16_t{});
+          break;
+        case gdcm::PixelFormat::UINT32:
+          convert(std::uint32_t{});
+          break;
+        case gdcm::PixelFormat::INT32:
+          convert(std::int32_t{});
+          break;
+        case gdcm::PixelFormat::FLOAT32:
+          convert(float{});
+          break;
+        case gdcm::PixelFormat::FLOAT64:
+          convert(double{});
+          break;
+        default:
+          fail(Status::unsupported, slices[k].file + ": unsupported pixel type");
       }
     });
     std::vector<char>().swap(buffers[k]);
@@ -307,7 +365,8 @@ Volume read_dicom(const std::string& path, const std::string& series_uid) {
     if (!uid.empty() && uid != own)
       fail(Status::usage, path + ": this file belongs to series " + own + ", not " + uid);
     uid = own;
-    const fs::path dir = fs::path(path).parent_path().empty() ? fs::path(".") : fs::path(path).parent_path();
+    const fs::path dir =
+        fs::path(path).parent_path().empty() ? fs::path(".") : fs::path(path).parent_path();
     for (const auto& e : fs::directory_iterator(dir, ec))
       if (e.is_regular_file(ec)) files.push_back(e.path().string());
     std::sort(files.begin(), files.end());

@@ -142,7 +142,8 @@ GltfParts build_gltf(const Mesh& m, const MeshWriteOptions& opt, const std::stri
   std::size_t offset = 0;
   if (!opt.compress) {
     for (const View& v : views) {
-      json bv = {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", v.bytes}, {"target", v.target}};
+      json bv = {
+          {"buffer", 0}, {"byteOffset", offset}, {"byteLength", v.bytes}, {"target", v.target}};
       if (v.target == kArrayBuffer) bv["byteStride"] = v.stride;
       buffer_views.push_back(bv);
       append(parts.bin, v.data, v.bytes);
@@ -169,9 +170,10 @@ GltfParts build_gltf(const Mesh& m, const MeshWriteOptions& opt, const std::stri
       const std::size_t at = parts.bin.size();
       append(parts.bin, enc.data(), size);
       pad4(parts.bin, '\0');
-      json ext = {{"buffer", 0},        {"byteOffset", at},
-                  {"byteLength", size}, {"byteStride", v.stride},
-                  {"count", v.count},   {"mode", v.target == kArrayBuffer ? "ATTRIBUTES" : "TRIANGLES"}};
+      json ext = {
+          {"buffer", 0},        {"byteOffset", at},
+          {"byteLength", size}, {"byteStride", v.stride},
+          {"count", v.count},   {"mode", v.target == kArrayBuffer ? "ATTRIBUTES" : "TRIANGLES"}};
       json bv = {{"buffer", 1},
                  {"byteOffset", offset},
                  {"byteLength", v.bytes},
@@ -200,20 +202,26 @@ GltfParts build_gltf(const Mesh& m, const MeshWriteOptions& opt, const std::stri
       hi[k] = std::max(hi[k], m.positions[3 * v + k]);
     }
   json accessors = json::array();
-  accessors.push_back({{"bufferView", 0}, {"componentType", kFloat}, {"count", nv},
-                       {"type", "VEC3"}, {"min", lo}, {"max", hi}});
+  accessors.push_back({{"bufferView", 0},
+                       {"componentType", kFloat},
+                       {"count", nv},
+                       {"type", "VEC3"},
+                       {"min", lo},
+                       {"max", hi}});
   json attributes = {{"POSITION", 0}};
   if (normals) {
-    accessors.push_back({{"bufferView", 1}, {"componentType", kFloat}, {"count", nv}, {"type", "VEC3"}});
+    accessors.push_back(
+        {{"bufferView", 1}, {"componentType", kFloat}, {"count", nv}, {"type", "VEC3"}});
     attributes["NORMAL"] = 1;
   }
-  accessors.push_back({{"bufferView", normals ? 2 : 1}, {"componentType", kUnsignedInt},
-                       {"count", 3 * nt}, {"type", "SCALAR"}});
+  accessors.push_back({{"bufferView", normals ? 2 : 1},
+                       {"componentType", kUnsignedInt},
+                       {"count", 3 * nt},
+                       {"type", "SCALAR"}});
   doc["accessors"] = accessors;
   doc["meshes"] = json::array(
-      {{{"primitives", json::array({{{"attributes", attributes},
-                                      {"indices", normals ? 2 : 1},
-                                      {"mode", 4}}})}}});
+      {{{"primitives",
+         json::array({{{"attributes", attributes}, {"indices", normals ? 2 : 1}, {"mode", 4}}})}}});
   doc["nodes"] = json::array({{{"mesh", 0}}});
   doc["scenes"] = json::array({{{"nodes", json::array({0})}}});
   parts.json = doc.dump();
@@ -226,7 +234,8 @@ void write_glb(const Mesh& mesh, std::ostream& os, const MeshWriteOptions& optio
   GltfParts parts = build_gltf(mesh, options, "");
   pad4(parts.json, ' ');
   pad4(parts.bin, '\0');
-  const std::size_t total = 12 + 8 + parts.json.size() + (parts.bin.empty() ? 0 : 8 + parts.bin.size());
+  const std::size_t total =
+      12 + 8 + parts.json.size() + (parts.bin.empty() ? 0 : 8 + parts.bin.size());
   if (total > 0xffffffffu)
     fail(Status::unsupported, "mesh too large for a GLB file (4 GiB limit); write .gltf instead");
   OutBuffer out(os);
