@@ -2,7 +2,8 @@
 # `make demo`: the whole pipeline on the bundled CT head (data/ct_headsq, BSD-3, see LICENSE.md):
 # marching cubes for reference, then the base mesh M0, the refinement hierarchy (.amh), the default
 # adaptive mesh, uniform levels and triangle-budget cuts taken from the hierarchy without the volume,
-# every mesh scored against the volume by `adamesh stats`, and a table of the results.
+# every mesh scored against the volume by `adamesh stats`, a table of the results, and the
+# hierarchy in a web page (out/demo/view.html, `adamesh view`).
 set -euo pipefail
 bin=${1:-build/release/apps/adamesh/adamesh}
 input=data/ct_headsq/quarter.nhdr
@@ -54,5 +55,15 @@ echo "the adaptive refinement reached it; budget N: the longest prefix of head.a
 echo "triangles (largest errors split first), shape-improved without the volume (level --improve,"
 echo "docs/QUALITY.md)."
 echo
+echo "== adamesh view: the hierarchy in one self-contained web page (level slider, no volume needed)"
+if "$bin" view "$out/head.amh" -o "$out/view.html" --report "$out/head_report.json"; then
+  written+=("$out/view.html")
+  view_note="open $out/view.html in a browser (xdg-open $out/view.html, or file://$(realpath "$out/view.html"))"
+else
+  view_note="adamesh view is unavailable in this build (see the message above)"
+fi
+echo
 echo "wrote:"
 printf '  %s\n' "${written[@]}" "$out"/stats_*.json
+echo
+echo "$view_note"

@@ -146,6 +146,7 @@ std::vector<OptionSpec> input_option_specs() {
       {"--label", true,
        "label maps: the boundary of the voxels with this value (iso 0.5 of their 0/1 mask; "
        "`adamesh info` lists the labels)"},
+      {"--series", true, "DICOM directory with several series: the SeriesInstanceUID to read"},
   };
 }
 
@@ -188,7 +189,20 @@ InputOptions input_options_from(const Args& args) {
   o.nan_value = args.get_double("--nan-value");
   o.flip_inside = args.has("--flip");
   o.label = args.get_int("--label");
+  o.raw.dicom_series = args.get_or("--series", "");
   return o;
+}
+
+OptionSpec compress_option_spec() {
+  return {"--compress", false, "glTF/GLB: EXT_meshopt_compression (lossless, needs a reader that knows it)"};
+}
+
+MeshWriteOptions mesh_output_options(const Args& args, const std::string& path) {
+  MeshWriteOptions wo;
+  wo.ascii = args.has("--ascii");
+  wo.compress = args.has("--compress");
+  mesh_format_for_writing(path, wo);
+  return wo;
 }
 
 }  // namespace adamesh::cli

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "adamesh/input.h"
+#include "adamesh/io.h"
 
 namespace adamesh::cli {
 
@@ -50,5 +51,12 @@ class Args {
 /// Options shared by every command that reads an INPUT (raw, implicit, NaN handling, inside flip).
 std::vector<OptionSpec> input_option_specs();
 InputOptions input_options_from(const Args& args);
+
+/// --compress (glTF/GLB: EXT_meshopt_compression), for the commands that write meshes.
+OptionSpec compress_option_spec();
+/// Mesh writing options from --ascii / --compress, after checking that `path` names a mesh
+/// format the writers know (mesh_format_for_writing): commands call it for every mesh output
+/// before any computing, so a bad extension fails at once.
+MeshWriteOptions mesh_output_options(const Args& args, const std::string& path);
 
 }  // namespace adamesh::cli

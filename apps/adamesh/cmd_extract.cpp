@@ -23,7 +23,7 @@ namespace {
 std::vector<OptionSpec> extract_specs() {
   std::vector<OptionSpec> s = {
       {"--iso", true, "iso-value (default: the input's default, 0 for shape:/expr:)"},
-      {"--base", true, "write the base mesh M0 here (.ply .obj .off .stl)"},
+      {"--base", true, "write the base mesh M0 here (.ply .obj .off .stl .glb .gltf)"},
       {"--rmax", true, "largest disk radius, world units (default sqrt(area/1000))"},
       {"--rmin", true, "smallest disk radius, world units (default 2 voxels)"},
       {"--voxels", false, "--rmax/--rmin are in voxel edge lengths instead of world units"},
@@ -34,7 +34,7 @@ std::vector<OptionSpec> extract_specs() {
       {"--attributes", false, "write per-vertex border/component attributes (PLY)"},
       {"--ascii", false, "ASCII PLY instead of binary"},
       {"--quiet", false, "no progress or summary output"},
-      {"-o", true, "write the refined mesh here (.ply .obj .off .stl)"},
+      {"-o", true, "write the refined mesh here (.ply .obj .off .stl .glb .gltf)"},
       {"--levels", true, "uniform refinement: K levels; the output is M_K"},
       {"--max-error", true,
        "adaptive: every triangle within E of the surface, world units (default: 0.25 voxel, "
@@ -50,6 +50,7 @@ std::vector<OptionSpec> extract_specs() {
       {"--no-improve", false,
        "no shape improvement of M0 and of the written mesh (flips, moves, collapses; "
        "docs/QUALITY.md): the output is the hierarchy's cut as it is"},
+      compress_option_spec(),
   };
   for (auto& o : input_option_specs()) s.push_back(o);
   return s;
@@ -185,6 +186,8 @@ int cmd_extract(const Argv& argv) {
   ExtractOptions opt = extract_options(args, spec);
   if (args.has("--labels")) return extract_all_labels(args, spec, opt);
   const InputOptions input = input_options_from(args);
+  for (const char* o : {"-o", "--base"})  // refuse unknown mesh formats before computing
+    if (auto path = args.get(o)) mesh_output_options(args, *path);
 
   Progress progress(quiet);
   std::string stage;
@@ -203,8 +206,6 @@ int cmd_extract(const Argv& argv) {
 
   Stopwatch clock;
   progress.stage("write");
-  MeshWriteOptions wo;
-  wo.ascii = args.has("--ascii");
   if (auto path = args.get("--base")) {
     if (args.has("--attributes")) {
       VertexAttribute border{"border", {}, {}}, comp{"component", {}, {}};
@@ -213,9 +214,9 @@ int cmd_extract(const Argv& argv) {
       res.base.mesh.attributes.push_back(std::move(border));
       res.base.mesh.attributes.push_back(std::move(comp));
     }
-    write_mesh(res.base.mesh, *path, wo);
+    write_mesh(res.base.mesh, *path, mesh_output_options(args, *path));
   }
-  if (auto path = args.get("-o")) write_mesh(res.mesh, *path, wo);
+  if (auto path = args.get("-o")) write_mesh(res.mesh, *path, mesh_output_options(args, *path));
   if (auto path = args.get("--hierarchy")) write_hierarchy(*res.hierarchy, *path);
   progress.finish();
   rep.timings_s["write"] = clock.lap();

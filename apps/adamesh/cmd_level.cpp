@@ -18,13 +18,14 @@ int cmd_level(const Argv& argv) {
                       {"--max-error", true, "the splits whose error bound exceeds E (world units)"},
                       {"--triangles", true, "the longest prefix of splits with at most N triangles"},
                       {"--all", false, "every split: the finest mesh"},
-                      {"-o", true, "output mesh (.ply .obj .off .stl)"},
+                      {"-o", true, "output mesh (.ply .obj .off .stl .glb .gltf)"},
                       {"--partial", false, "accept a file cut short in its split list"},
                       {"--improve", false,
                        "shape improvement without the volume (flips within 0.25 voxel of the "
                        "cut, tangential moves, needle collapses; docs/QUALITY.md)"},
                       {"--ascii", false, "ASCII PLY instead of binary"},
                       {"--quiet", false, "no summary line"},
+                      compress_option_spec(),
                   });
   if (args.help_requested()) {
     std::cout << args.usage("FILE.amh (--level K | --max-error E | --triangles N | --all) -o mesh.ply");
@@ -37,6 +38,7 @@ int cmd_level(const Argv& argv) {
     fail(Status::usage, "adamesh level: give exactly one of --level, --max-error, --triangles, --all");
   const auto out = args.get("-o");
   if (!out) fail(Status::usage, "adamesh level: -o FILE is required");
+  const MeshWriteOptions wo = mesh_output_options(args, *out);
 
   const std::string path = args.positionals()[0];
   HierarchyReadOptions ro;
@@ -71,8 +73,6 @@ int cmd_level(const Argv& argv) {
     improve_mesh(cut.mesh, cut.vertex_border, nullptr, h.iso, io);
     what += ", improved";
   }
-  MeshWriteOptions wo;
-  wo.ascii = args.has("--ascii");
   write_mesh(cut.mesh, *out, wo);
   if (!args.has("--quiet")) {
     std::cout << path << " (" << what << "): " << cut.mesh.num_triangles() << " triangles, "

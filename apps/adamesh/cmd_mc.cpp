@@ -34,10 +34,11 @@ std::string fixed(double v, int decimals) {
 int cmd_mc(const Argv& argv) {
   std::vector<OptionSpec> specs = input_option_specs();
   specs.push_back({"--iso", true, "iso-value (default: the input's own, e.g. 0 for shapes)"});
-  specs.push_back({"-o", true, "output mesh (.ply .obj .off .stl), written atomically"});
+  specs.push_back({"-o", true, "output mesh (.ply .obj .off .stl .glb .gltf), written atomically"});
   specs.push_back({"--threads", true, "worker threads, 0 = all (default); output is identical"});
   specs.push_back({"--ascii", false, "PLY: write ASCII instead of binary"});
   specs.push_back({"--quiet", false, "print nothing on success"});
+  specs.push_back(compress_option_spec());
   const Args args("mc", argv, specs);
   if (args.help_requested()) {
     std::cout << args.usage("INPUT [--iso V] -o MESH [--threads N] [--ascii] [--quiet]")
@@ -53,8 +54,7 @@ int cmd_mc(const Argv& argv) {
   const std::int64_t threads = args.get_int("--threads").value_or(0);
   if (threads < 0 || threads > 4096)
     fail(Status::usage, "adamesh mc: --threads must be between 0 and 4096");
-  MeshWriteOptions write_options;
-  write_options.ascii = args.has("--ascii");
+  const MeshWriteOptions write_options = mesh_output_options(args, *out_path);
 
   const auto t_load = std::chrono::steady_clock::now();
   const Input in = load_input(args.positionals()[0], input_options_from(args));

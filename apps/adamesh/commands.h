@@ -20,6 +20,7 @@ int cmd_level(const Argv& args);
 int cmd_mc(const Argv& args);
 int cmd_stats(const Argv& args);
 int cmd_info(const Argv& args);
+int cmd_view(const Argv& args);
 int cmd_version(const Argv& args);
 
 /// All registered commands (main.cpp).

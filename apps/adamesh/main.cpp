@@ -16,6 +16,7 @@ const std::vector<Command>& commands() {
       {"level", "cut a mesh from a refinement hierarchy (.amh) without the volume", cmd_level},
       {"mc", "marching cubes mesh of an iso-surface (reference, manifold)", cmd_mc},
       {"stats", "topology, quality and error report of a mesh", cmd_stats},
+      {"view", "self-contained HTML viewer of a hierarchy (.amh) or mesh, with a level slider", cmd_view},
       {"version", "print the version", cmd_version},
   };
   return table;
@@ -38,7 +39,7 @@ void print_help() {
     std::cout << "  " << name << c.summary << "\n";
   }
   std::cout << "\ninputs: a volume file (.nrrd .nhdr .mhd .mha .nii .nii.gz .vtk .vti .slc .mrc "
-               ".map .raw), shape:NAME or expr:'EXPR'\n";
+               ".map .raw), a DICOM series directory, shape:NAME or expr:'EXPR'\n";
 }
 
 }  // namespace

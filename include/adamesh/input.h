@@ -21,6 +21,8 @@ struct RawOptions {
   Vec3 origin{};
   bool big_endian = false;
   std::uint64_t header_bytes = 0;  ///< bytes to skip at the start of the file
+  /// DICOM (not raw): SeriesInstanceUID to read from a directory holding several series.
+  std::string dicom_series;
 };
 
 struct InputOptions {

@@ -23,6 +23,10 @@ void write_ply(const Mesh& mesh, std::ostream& os, const MeshWriteOptions& optio
 void write_obj(const Mesh& mesh, std::ostream& os, const MeshWriteOptions& options);
 void write_off(const Mesh& mesh, std::ostream& os, const MeshWriteOptions& options);
 void write_stl(const Mesh& mesh, std::ostream& os);
+void write_glb(const Mesh& mesh, std::ostream& os, const MeshWriteOptions& options);
+/// `.gltf` JSON at `path` plus its buffer in gltf_bin_path(path), both written atomically.
+void write_gltf(const Mesh& mesh, const std::string& path, const MeshWriteOptions& options);
+std::string gltf_bin_path(const std::string& path);
 
 /// Readers parse the whole file held in `data`; `path` only names the file in error messages.
 Mesh read_ply(const std::string& path, std::string_view data);

@@ -24,6 +24,8 @@ MeshFormat format_from_extension(const std::string& path) {
   if (ext == ".obj") return MeshFormat::obj;
   if (ext == ".off") return MeshFormat::off;
   if (ext == ".stl") return MeshFormat::stl;
+  if (ext == ".glb") return MeshFormat::glb;
+  if (ext == ".gltf") return MeshFormat::gltf;
   return MeshFormat::automatic;
 }
 
@@ -100,13 +102,25 @@ MeshFormat sniff_format(std::string_view data) {
 
 }  // namespace
 
-void write_mesh(const Mesh& mesh, const std::string& path, const MeshWriteOptions& options) {
+MeshFormat mesh_format_for_writing(const std::string& path, const MeshWriteOptions& options) {
   MeshFormat format = options.format;
   if (format == MeshFormat::automatic) format = format_from_extension(path);
   if (format == MeshFormat::automatic)
-    fail(Status::unsupported,
-         path + ": unknown mesh format (use the extension .ply, .obj, .off or .stl)");
+    fail(Status::unsupported, path +
+                                  ": unknown mesh format (use the extension .ply, .obj, .off, "
+                                  ".stl, .glb or .gltf)");
+  if (options.compress && format != MeshFormat::glb && format != MeshFormat::gltf)
+    fail(Status::unsupported, path + ": compression is for glTF only (use .glb or .gltf)");
+  return format;
+}
+
+void write_mesh(const Mesh& mesh, const std::string& path, const MeshWriteOptions& options) {
+  const MeshFormat format = mesh_format_for_writing(path, options);
   check_mesh_for_writing(mesh, path, options);
+  if (format == MeshFormat::gltf) {
+    fmt::write_gltf(mesh, path, options);
+    return;
+  }
   // Text formats are written in binary mode too: "\n" line ends on every platform.
   write_file_atomically(path, [&](std::ostream& os) {
     switch (format) {
@@ -114,6 +128,8 @@ void write_mesh(const Mesh& mesh, const std::string& path, const MeshWriteOption
       case MeshFormat::obj: fmt::write_obj(mesh, os, options); break;
       case MeshFormat::off: fmt::write_off(mesh, os, options); break;
       case MeshFormat::stl: fmt::write_stl(mesh, os); break;
+      case MeshFormat::glb: fmt::write_glb(mesh, os, options); break;
+      case MeshFormat::gltf:
       case MeshFormat::automatic: break;
     }
   });
@@ -128,6 +144,9 @@ Mesh read_mesh(const std::string& path) {
     case MeshFormat::obj: return fmt::read_obj(path, data);
     case MeshFormat::off: return fmt::read_off(path, data);
     case MeshFormat::stl: return fmt::read_stl(path, data);
+    case MeshFormat::glb:
+    case MeshFormat::gltf:
+      fail(Status::unsupported, path + ": glTF meshes are written, not read (use PLY, OBJ, OFF or STL)");
     case MeshFormat::automatic: break;
   }
   fail(Status::unsupported, path + ": unknown mesh format (expected PLY, OBJ, OFF or STL)");

@@ -1,7 +1,9 @@
-// read_volume(): picks the volume reader from the file extension and checks it against the
+// read_volume(): a directory (or a DICOM file) is a DICOM series (dicom.cpp); otherwise picks
+// the volume reader from the file extension and checks it against the
 // file's magic bytes (a file whose content is clearly another supported format is rejected
 // with a message naming both); unknown extensions are identified by their magic alone.
 #include <cstring>
+#include <filesystem>
 #include <string_view>
 
 #include "adamesh/error.h"
@@ -107,10 +109,28 @@ Volume dispatch(Fmt f, const std::string& path, const RawOptions& raw) {
   fail(Status::internal, path + ": no reader for this format");
 }
 
+/// DICOM: a directory (unless named like another format: "x.nrrd/" is a mistake, reported as
+/// "is a directory"), a `.dcm` file, or a file with the Part 10 preamble.
+bool is_dicom_input(const std::string& path, const std::string& ext) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) return from_extension(ext) == Fmt::unknown;
+  return ext == ".dcm" || detail::is_dicom_file(path);
+}
+
 }  // namespace
+
+Volume read_dicom_series(const std::vector<std::string>& files, const std::string& series_uid) {
+  const std::string where = files.empty() ? std::string("DICOM series") : files.front() + " (and " +
+                                std::to_string(files.size() - 1) + " more files)";
+  if (files.empty()) fail_input(where, "no files given");
+  Volume v = detail::read_dicom_series(files, where, series_uid);
+  v.source = files.front();
+  return v;
+}
 
 std::string volume_format_for(const std::string& path, const RawOptions& raw) {
   if (raw.dims) return "raw";
+  if (is_dicom_input(path, detail::lower_extension(path))) return "DICOM";
   const std::string ext = detail::lower_extension(path);
   Fmt f = from_extension(ext);
   bool nifti2 = false;
@@ -146,6 +166,11 @@ Volume read_volume(const std::string& path, const RawOptions& raw) {
     return v;
   }
   const std::string ext = detail::lower_extension(path);
+  if (is_dicom_input(path, ext)) {
+    Volume v = detail::read_dicom(path, raw.dicom_series);
+    v.source = path;
+    return v;
+  }
   const Fmt by_ext = from_extension(ext);
   std::string head;
   {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "adamesh/input.h"
 #include "adamesh/volume.h"
@@ -18,5 +19,13 @@ Volume read_vti(const std::string& path);
 Volume read_slc(const std::string& path);
 Volume read_mrc(const std::string& path);
 Volume read_raw(const std::string& path, const RawOptions& raw);
+/// DICOM series (dicom.cpp, GDCM): `path` is a directory, or one slice whose directory holds the
+/// series. `series_uid` empty: the only series there (several: Error(usage) listing them).
+Volume read_dicom(const std::string& path, const std::string& series_uid);
+/// The series `series_uid` (empty: the only one) among `files`; `where` names them in messages.
+Volume read_dicom_series(const std::vector<std::string>& files, const std::string& where,
+                         const std::string& series_uid);
+/// True when the file has the DICOM Part 10 preamble ("DICM" at byte 128).
+bool is_dicom_file(const std::string& path);
 
 }  // namespace adamesh::detail
