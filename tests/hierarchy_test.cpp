@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "adamesh/error.h"
@@ -214,6 +215,48 @@ TEST(Hierarchy, CorruptFilesFailWithOneLineNamingTheFile) {
     EXPECT_THROW(write_hierarchy(*bad, tmp.file("never.amh")), Error);
     EXPECT_FALSE(std::filesystem::exists(tmp.file("never.amh")));
   }
+}
+
+TEST(Hierarchy, HeaderValuesAreValidated) {
+  // Issue 17: NaN/zero/negative voxel size, NaN iso, inverted bounds, a border flag of 2 and a
+  // finite 1e308 base position passed validation; `level` then wrote inf coordinates.
+  const Hierarchy h = adaptive(sheet());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<std::pair<std::string, Hierarchy>> bad;
+  for (double voxel : {nan, 0.0, -1.0}) {
+    bad.emplace_back("voxel " + std::to_string(voxel), h);
+    bad.back().second.voxel = voxel;
+  }
+  bad.emplace_back("nan iso", h);
+  bad.back().second.iso = nan;
+  bad.emplace_back("inverted bounds", h);
+  std::swap(bad.back().second.bounds.lo, bad.back().second.bounds.hi);
+  bad.emplace_back("border flag 2", h);
+  bad.back().second.base_border[0] = 2;
+  bad.emplace_back("base position 1e308", h);
+  bad.back().second.base_positions[0].x = 1e308;
+  bad.emplace_back("split position -1e300", h);
+  bad.back().second.splits[0].position.z = -1e300;
+  for (const auto& [what, b] : bad) EXPECT_THROW(validate_hierarchy(b), Error) << what;
+  EXPECT_NO_THROW(validate_hierarchy(h));
+
+  // The same through a file with a valid checksum: `level` refuses it (exit 2), writes nothing.
+  TempDir tmp;
+  write_hierarchy(h, tmp.file("good.amh"));
+  std::string bytes = read_bytes(tmp.file("good.amh"));
+  const double big = 1e308;
+  std::memcpy(&bytes[104], &big, 8);  // first base vertex x (after the 104-byte header)
+  std::uint64_t fnv = 1469598103934665603ull;
+  for (std::size_t i = 0; i + 8 < bytes.size(); ++i) {
+    fnv ^= static_cast<unsigned char>(bytes[i]);
+    fnv *= 1099511628211ull;
+  }
+  std::memcpy(&bytes[bytes.size() - 8], &fnv, 8);
+  write_bytes(tmp.file("big.amh"), bytes);
+  const auto r = run_cli("level " + tmp.file("big.amh") + " --all -o " + tmp.file("x.ply"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("base vertex 0"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(tmp.file("x.ply")));
 }
 
 // ------------------------------------------------------------------------------------ CLI

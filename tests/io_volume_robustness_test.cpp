@@ -1,6 +1,8 @@
 // Robustness: small valid files of every format, truncated at every length and with bytes
 // overwritten at many positions, must either load or fail with adamesh::Error and a one-line
 // "<path>: ..." message — never another exception, a crash or a hang.
+#include <cstdlib>
+#include <map>
 #include <random>
 
 #include "io_volume_test_util.h"
@@ -132,10 +134,22 @@ void expect_clean(const std::string& path, const std::string& what) {
 
 TEST(VolumeRobustness, SeedsAreValid) {
   TempDir tmp;
+  // fuzz/make_seeds.sh sets ADAMESH_FUZZ_SEEDS to fuzz/corpus: the seeds become the fuzzers'
+  // starting corpus, one folder per reader (docs/FUZZING.md).
+  const char* corpus = std::getenv("ADAMESH_FUZZ_SEEDS");
   for (const auto& s : seeds()) {
     const std::string path = tmp.file(s.name);
     write_bytes(path, s.bytes);
     EXPECT_NO_THROW((void)read_volume(path)) << s.name;
+    if (corpus == nullptr) continue;
+    const std::string ext = s.name.substr(s.name.find('.'));
+    const std::map<std::string, std::string> target = {
+        {".nrrd", "nrrd"}, {".mha", "metaimage"}, {".nii", "nifti"}, {".vtk", "vtk"},
+        {".vti", "vti"},   {".slc", "slc"},       {".mrc", "mrc"}};
+    if (!target.count(ext)) continue;
+    const std::filesystem::path dir = std::filesystem::path(corpus) / target.at(ext);
+    std::filesystem::create_directories(dir);
+    write_bytes((dir / ("seed_" + s.name)).string(), s.bytes);
   }
 }
 

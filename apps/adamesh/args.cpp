@@ -1,6 +1,7 @@
 #include "args.h"
 
 #include <charconv>
+#include <cmath>
 #include <sstream>
 
 #include "adamesh/error.h"
@@ -18,7 +19,7 @@ bool parse_double(const std::string& s, double& out) {
   try {
     std::size_t used = 0;
     out = std::stod(s, &used);
-    return used == s.size();
+    return used == s.size() && std::isfinite(out);  // "nan", "inf": no option takes them
   } catch (...) {
     return false;
   }
@@ -80,7 +81,7 @@ std::optional<double> Args::get_double(const std::string& name) const {
   auto v = get(name);
   if (!v) return std::nullopt;
   double d = 0;
-  if (!parse_double(*v, d)) usage_error(command_, "option " + name + " expects a number, got '" + *v + "'");
+  if (!parse_double(*v, d)) usage_error(command_, "option " + name + " expects a finite number, got '" + *v + "'");
   return d;
 }
 

@@ -17,37 +17,45 @@ inline double peak_rss_mb() {
   return static_cast<double>(ru.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
 }
 
-/// Prints "stage ... 12%" progress lines on stderr (one line per stage, updated in place on a
-/// terminal), unless quiet.
+/// Progress of the stages on stderr, unless quiet. On a terminal a stage's line is updated in
+/// place ("  surfels       40%") and erased if an error interrupts the stage; elsewhere (logs,
+/// pipes) a stage prints one complete line when it finishes. Either way an error message is never
+/// preceded by a half-written progress line.
 class Progress {
  public:
   explicit Progress(bool quiet) : quiet_(quiet), tty_(isatty_stderr()) {}
   ~Progress() {
-    if (!quiet_ && open_) std::fputc('\n', stderr);  // an error interrupted the stage
+    if (!quiet_ && open_ && tty_) {  // an error interrupted the stage: erase its line
+      std::fputs("\r\033[K", stderr);
+      std::fflush(stderr);
+    }
   }
   void stage(const char* name) {
     if (quiet_) return;
     finish();
     current_ = name;
-    std::fprintf(stderr, "  %-12s", name);
-    std::fflush(stderr);
+    if (tty_) {
+      std::fprintf(stderr, "  %-12s", name);
+      std::fflush(stderr);
+    }
     open_ = true;
     last_pct_ = -1;
     t0_ = std::chrono::steady_clock::now();
   }
   void fraction(double f) {
-    if (quiet_ || !open_) return;
+    if (quiet_ || !open_ || !tty_) return;
     const int pct = static_cast<int>(f * 100);
     if (pct / 10 == last_pct_ / 10 && last_pct_ >= 0) return;
     last_pct_ = pct;
-    if (tty_) std::fprintf(stderr, "\r  %-12s %3d%%", current_.c_str(), pct);
-    else std::fprintf(stderr, " %d%%", pct);
+    std::fprintf(stderr, "\r  %-12s %3d%%", current_.c_str(), pct);
     std::fflush(stderr);
   }
   void finish() {
     if (quiet_ || !open_) return;
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
-    std::fprintf(stderr, " done %.3f s\n", s);
+    if (tty_) std::fprintf(stderr, "\r  %-12s done %.3f s\n", current_.c_str(), s);
+    else std::fprintf(stderr, "  %-12s done %.3f s\n", current_.c_str(), s);
+    std::fflush(stderr);
     open_ = false;
   }
 

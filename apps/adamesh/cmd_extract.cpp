@@ -15,6 +15,7 @@
 #include "args.h"
 #include "cli_util.h"
 #include "commands.h"
+#include "outputs.h"
 
 namespace adamesh::cli {
 
@@ -126,6 +127,7 @@ int extract_all_labels(const Args& args, const std::string& spec, const ExtractO
   if (!std::filesystem::is_directory(dir, ec))
     fail(Status::output_failed, *out + ": --labels all writes into a folder, and this one does not "
                                        "exist (create it first)");
+  check_output_target((dir / "labels.json").string());  // the folder is writable, before any work
   const std::string ext = args.get("--format").value_or("ply");
   if (ext != "ply" && ext != "obj" && ext != "off" && ext != "stl")
     fail(Status::usage, "adamesh extract: --format must be ply, obj, off or stl");
@@ -185,6 +187,11 @@ int cmd_extract(const Argv& argv) {
                         "--base FILE or --report FILE");
   ExtractOptions opt = extract_options(args, spec);
   if (args.has("--labels")) return extract_all_labels(args, spec, opt);
+  // Every output is checked before any work (a missing --hierarchy folder used to be found
+  // after minutes, with the other outputs already written).
+  check_outputs("extract", args,
+                {{"-o", OutputKind::mesh}, {"--base", OutputKind::mesh},
+                 {"--hierarchy", OutputKind::hierarchy}, {"--report", OutputKind::report}});
   const InputOptions input = input_options_from(args);
   for (const char* o : {"-o", "--base"})  // refuse unknown mesh formats before computing
     if (auto path = args.get(o)) mesh_output_options(args, *path);

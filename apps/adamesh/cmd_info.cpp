@@ -103,17 +103,26 @@ void print_text(const Input& in, const InputOptions& o, const VolumeStats& s,
   const Box b = g.world_bounds();
   bounds << '[' << fmt(b.lo) << "] .. [" << fmt(b.hi) << ']';
   line("bounds", bounds.str());
-  line("range", fmt(s.min) + " .. " + fmt(s.max));
-  line("mean", fmt(s.mean));
-  std::string p;
-  for (std::size_t q = 0; q < s.percentiles.size(); ++q)
-    p += (q ? "  " : "") + percentile_key(VolumeStats::kPercentileLevels[q]) + "%: " + fmt(s.percentiles[q]);
-  if (s.percentile_error > 0) p += "  (± " + fmt(s.percentile_error) + ")";
-  line("percentiles", p);
-  line("NaN/Inf", nonfinite_text(in, o));
-  if (labels.empty()) {
-    line("suggested iso", fmt(s.otsu) + " (Otsu)");
+  if (s.finite == 0) {  // e.g. an all-NaN volume: no statistic exists
+    const std::string none = "none (no finite samples)";
+    line("range", none);
+    line("mean", none);
+    line("percentiles", none);
+    line("NaN/Inf", nonfinite_text(in, o));
+    line("suggested iso", none);
   } else {
+    line("range", fmt(s.min) + " .. " + fmt(s.max));
+    line("mean", fmt(s.mean));
+    std::string p;
+    for (std::size_t q = 0; q < s.percentiles.size(); ++q)
+      p += (q ? "  " : "") + percentile_key(VolumeStats::kPercentileLevels[q]) + "%: " + fmt(s.percentiles[q]);
+    if (s.percentile_error > 0) p += "  (± " + fmt(s.percentile_error) + ")";
+    line("percentiles", p);
+    line("NaN/Inf", nonfinite_text(in, o));
+  }
+  if (s.finite > 0 && labels.empty()) {
+    line("suggested iso", fmt(s.otsu) + " (Otsu)");
+  } else if (s.finite > 0) {
     line("label map", std::to_string(labels.size()) +
                           " labels (integer values); mesh one with `extract --label L`, all with "
                           "`extract --labels all -o DIR/`");

@@ -8,6 +8,7 @@
 #include "adamesh/refine.h"
 #include "args.h"
 #include "commands.h"
+#include "outputs.h"
 
 namespace adamesh::cli {
 
@@ -39,6 +40,7 @@ int cmd_level(const Argv& argv) {
   const auto out = args.get("-o");
   if (!out) fail(Status::usage, "adamesh level: -o FILE is required");
   const MeshWriteOptions wo = mesh_output_options(args, *out);
+  check_outputs("level", args, {{"-o", OutputKind::mesh}});
 
   const std::string path = args.positionals()[0];
   HierarchyReadOptions ro;

@@ -14,6 +14,7 @@
 #include "adamesh/surfels.h"
 #include "args.h"
 #include "commands.h"
+#include "outputs.h"
 
 namespace adamesh::cli {
 
@@ -55,6 +56,7 @@ int cmd_mc(const Argv& argv) {
   if (threads < 0 || threads > 4096)
     fail(Status::usage, "adamesh mc: --threads must be between 0 and 4096");
   const MeshWriteOptions write_options = mesh_output_options(args, *out_path);
+  check_outputs("mc", args, {{"-o", OutputKind::mesh}});  // before any work
 
   const auto t_load = std::chrono::steady_clock::now();
   const Input in = load_input(args.positionals()[0], input_options_from(args));
@@ -65,6 +67,7 @@ int cmd_mc(const Argv& argv) {
   else
     fail(Status::usage, "adamesh mc: " + in.spec +
                             " has no default iso-value; give --iso V (adamesh info suggests one)");
+  check_iso_in_range(in, iso);  // as extract: an iso-value outside the data is an error
 
   const int nthreads = static_cast<int>(threads);
   tbb::task_arena arena(nthreads > 0 ? nthreads : tbb::task_arena::automatic);

@@ -6,6 +6,7 @@
 
 #include "adamesh/error.h"
 #include "commands.h"
+#include "outputs.h"
 
 namespace adamesh::cli {
 
@@ -62,13 +63,19 @@ int main(int argc, char** argv) {
       return c.run(rest);
     } catch (const Error& e) {
       std::cout.flush();
-      std::cerr << "adamesh: " << e.what() << "\n";
+      // One line, control bytes escaped; messages that already start with "adamesh CMD:" keep
+      // that prefix alone (no "adamesh: adamesh mc: ...").
+      const std::string what = e.what();
+      const bool prefixed = what.rfind("adamesh ", 0) == 0;
+      std::cerr << (prefixed ? "" : "adamesh: ") << one_line(what) << "\n";
       return static_cast<int>(e.status());
     } catch (const std::bad_alloc&) {
+      std::cout.flush();
       std::cerr << "adamesh: out of memory\n";
       return static_cast<int>(Status::internal);
     } catch (const std::exception& e) {
-      std::cerr << "adamesh: internal error: " << e.what() << "\n";
+      std::cout.flush();
+      std::cerr << "adamesh: internal error: " << one_line(e.what()) << "\n";
       return static_cast<int>(Status::internal);
     }
   }

@@ -41,6 +41,9 @@ struct MeshWriteOptions {
   bool compress = false;
 };
 
+/// The format write_mesh() picks for `path` from its extension; automatic when none fits.
+MeshFormat mesh_format_from_path(const std::string& path);
+
 /// The format write_mesh() would use for `path` with `options` (from the extension when
 /// options.format is automatic). Call it before any computing to refuse a bad output name early.
 /// Throws Error(unsupported, "<path>: unknown mesh format (use ...)") for an unknown extension,

@@ -23,7 +23,8 @@ struct VolumeStats {
   double mean = std::numeric_limits<double>::quiet_NaN();
   /// Nearest-rank percentiles of the finite samples: the smallest sample value v such that at
   /// least P% of the samples are ≤ v (rank ceil(P/100 · finite), at least 1).
-  std::array<double, 7> percentiles{};
+  /// NaN when there are no finite samples.
+  std::array<double, 7> percentiles = filled_nan();
   /// Bound on |reported − exact| over all percentiles: 0 when exact (always for 8/16-bit data
   /// and integer data with range < 65536; other data: exact unless, after a 65536-bin histogram
   /// and 4 refinement passes of 4096 bins over the members' range, the percentile's bin still
@@ -35,6 +36,13 @@ struct VolumeStats {
   /// bins between two modes) the middle of the plateau is taken. NaN when there are no finite
   /// samples; min when all finite samples are equal.
   double otsu = std::numeric_limits<double>::quiet_NaN();
+
+ private:
+  static constexpr std::array<double, 7> filled_nan() {
+    std::array<double, 7> a{};
+    for (double& x : a) x = std::numeric_limits<double>::quiet_NaN();
+    return a;
+  }
 };
 
 /// Statistics of `volume`'s samples. Parallel (oneTBB); results do not depend on the thread count.

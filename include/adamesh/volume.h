@@ -68,6 +68,16 @@ struct Grid {
   bool axis_aligned() const noexcept;
 };
 
+/// Largest world coordinate magnitude adamesh accepts (inputs, grids, hierarchies): meshes store
+/// float coordinates and the metrics square lengths, so 1e18 keeps every squared length finite in
+/// float (3.4e38). The smallest voxel edge accepted is 1e-18 (its square stays a normal float).
+inline constexpr double kMaxWorldCoordinate = 1e18;
+inline constexpr double kMinVoxelEdge = 1e-18;
+
+/// Throws Error(invalid_input, "<where>: ...") unless every corner of the grid lies within
+/// ±kMaxWorldCoordinate and every voxel edge is finite and at least kMinVoxelEdge long.
+void check_world_range(const Grid& grid, const std::string& where);
+
 /// Uninitialised, owned byte buffer (no zero-fill of large volumes).
 class SampleBuffer {
  public:

@@ -3,6 +3,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <cctype>
 #include <fstream>
 #include <limits>
@@ -10,6 +12,14 @@
 #include <sstream>
 
 #include "adamesh/error.h"
+
+namespace {
+std::string format_double(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+}  // namespace
 
 namespace adamesh {
 
@@ -92,6 +102,24 @@ Box Grid::world_bounds() const noexcept {
 double Grid::min_spacing() const noexcept {
   const Mat3 a = index_to_world_matrix();
   return std::min({norm(a.column(0)), norm(a.column(1)), norm(a.column(2))});
+}
+
+void check_world_range(const Grid& g, const std::string& where) {
+  const Mat3 a = g.index_to_world_matrix();
+  for (int c = 0; c < 3; ++c) {
+    const double len = norm(a.column(c));
+    if (!(len >= kMinVoxelEdge && len <= kMaxWorldCoordinate))
+      fail_input(where, "voxel edge " + std::to_string(c) + " is " + format_double(len) +
+                            " world units long (adamesh needs " + format_double(kMinVoxelEdge) +
+                            " to " + format_double(kMaxWorldCoordinate) + ")");
+  }
+  const Box b = g.world_bounds();
+  for (int c = 0; c < 3; ++c)
+    if (!(std::abs(b.lo[c]) <= kMaxWorldCoordinate && std::abs(b.hi[c]) <= kMaxWorldCoordinate))
+      fail_input(where, "world coordinates reach " +
+                            format_double(std::max(std::abs(b.lo[c]), std::abs(b.hi[c]))) +
+                            ", beyond the supported ±" + format_double(kMaxWorldCoordinate) +
+                            " (check the origin and spacing)");
 }
 
 bool Grid::axis_aligned() const noexcept { return direction == Mat3::identity(); }

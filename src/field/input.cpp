@@ -28,6 +28,9 @@ Grid implicit_grid(const Box& box, int res, const std::string& spec) {
   for (int a = 0; a < 3; ++a)
     if (!(std::isfinite(box.lo[a]) && std::isfinite(box.hi[a]) && box.lo[a] < box.hi[a]))
       fail(Status::usage, spec + ": bounds need finite xmin<xmax, ymin<ymax, zmin<zmax");
+  for (int a = 0; a < 3; ++a)
+    if (std::abs(box.lo[a]) > kMaxWorldCoordinate || std::abs(box.hi[a]) > kMaxWorldCoordinate)
+      fail(Status::usage, spec + ": bounds must lie within ±1e18 world units");
   if (res < 2) fail(Status::usage, spec + ": resolution must be at least 2, got " + std::to_string(res));
   const Vec3 ext = box.size();
   const double longest = std::max({ext.x, ext.y, ext.z});
@@ -40,6 +43,7 @@ Grid implicit_grid(const Box& box, int res, const std::string& spec) {
     g.dims[a] = static_cast<std::int64_t>(n);
     g.origin[a] = 0.5 * (box.lo[a] + box.hi[a]) - 0.5 * double(g.dims[a] - 1) * h;
   }
+  check_world_range(g, spec);  // e.g. bounds 1e-30 wide: voxels below kMinVoxelEdge
   return g;
 }
 

@@ -96,7 +96,14 @@ void require_range(const InputFile& f, std::uint64_t offset, std::uint64_t bytes
 
 std::string resolve_relative(const std::string& header_path, const std::string& name) {
   const std::filesystem::path p(name);
-  if (p.is_absolute()) return name;
+  // A header names its data, so an untrusted header could otherwise make adamesh mesh any file
+  // the user can read (/etc/passwd): data files must lie in the header's folder or below it.
+  const std::filesystem::path norm = p.lexically_normal();
+  if (name.empty() || p.is_absolute() || p.has_root_name() ||
+      (!norm.empty() && *norm.begin() == ".."))
+    fail_input(header_path, "data file '" + name +
+                                "' is outside the header's folder (adamesh reads detached data "
+                                "only from the header's folder or below)");
   const std::filesystem::path dir = std::filesystem::path(header_path).parent_path();
   return dir.empty() ? name : (dir / p).string();
 }
@@ -611,7 +618,10 @@ std::string format_file_pattern(const std::string& pattern, std::int64_t value,
         ++conversions > 1)
       fail_input(where, "unsupported data file pattern '" + pattern +
                             "' (expected one %d-style conversion)");
-    std::string digits = std::to_string(value < 0 ? -value : value);
+    // The magnitude in unsigned arithmetic: -INT64_MIN does not fit in an int64_t.
+    const std::uint64_t magnitude =
+        value < 0 ? std::uint64_t(0) - static_cast<std::uint64_t>(value) : static_cast<std::uint64_t>(value);
+    std::string digits = std::to_string(magnitude);
     const std::size_t sign = value < 0 ? 1 : 0;
     std::string pad;
     if (digits.size() + sign < std::size_t(width)) pad.assign(width - digits.size() - sign, zero ? '0' : ' ');
@@ -621,6 +631,33 @@ std::string format_file_pattern(const std::string& pattern, std::int64_t value,
   if (conversions != 1)
     fail_input(where, "data file pattern '" + pattern + "' has no %d-style conversion");
   return out;
+}
+
+std::vector<std::string> expand_file_pattern(const std::string& pattern, std::int64_t lo,
+                                             std::int64_t hi, std::int64_t step,
+                                             const std::string& where, const std::string& field) {
+  constexpr std::uint64_t kMaxFiles = 1000000;
+  const std::string range = std::to_string(lo) + " " + std::to_string(hi) + " " + std::to_string(step);
+  if (step == 0 || (step > 0 && hi < lo) || (step < 0 && hi > lo))
+    fail_input(where, "invalid " + field + " range '" + range + "'");
+  // |hi - lo| and |step| as unsigned 64-bit values: exact for every pair of int64 values.
+  const std::uint64_t span = hi >= lo ? static_cast<std::uint64_t>(hi) - static_cast<std::uint64_t>(lo)
+                                      : static_cast<std::uint64_t>(lo) - static_cast<std::uint64_t>(hi);
+  const std::uint64_t stride = step > 0 ? static_cast<std::uint64_t>(step)
+                                        : std::uint64_t(0) - static_cast<std::uint64_t>(step);
+  const std::uint64_t count = span / stride;  // files after the first
+  if (count >= kMaxFiles)
+    fail_input(where, field + " range '" + range + "' names more than 1000000 files");
+  std::vector<std::string> names;
+  names.reserve(static_cast<std::size_t>(count + 1));
+  for (std::uint64_t k = 0; k <= count; ++k) {
+    // lo + k*step stays between lo and hi, so the unsigned sum converts back exactly.
+    const std::uint64_t offset = k * stride;
+    const std::int64_t i = step > 0 ? static_cast<std::int64_t>(static_cast<std::uint64_t>(lo) + offset)
+                                    : static_cast<std::int64_t>(static_cast<std::uint64_t>(lo) - offset);
+    names.push_back(format_file_pattern(pattern, i, where));
+  }
+  return names;
 }
 
 void set_axes_from_vectors(Grid& g, const Vec3& a0, const Vec3& a1, const Vec3& a2,

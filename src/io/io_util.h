@@ -51,7 +51,8 @@ class InputFile {
 /// Fails with "<path>: truncated data: ..." unless [offset, offset+bytes) lies inside the file.
 void require_range(const InputFile& f, std::uint64_t offset, std::uint64_t bytes, const char* what);
 
-/// `name` resolved against the directory of `header_path` unless it is absolute.
+/// `name` resolved against the directory of `header_path`. Fails (invalid input) when `name` is
+/// absolute or leaves that directory through "..": a header may only name data beside or below it.
 std::string resolve_relative(const std::string& header_path, const std::string& name);
 
 // ---------------------------------------------------------------------------- compression
@@ -198,6 +199,14 @@ std::string format_dims(const std::array<std::int64_t, 3>& d);
 /// optional '0' flag and width; "%%" is a literal '%'). Fails on any other conversion.
 std::string format_file_pattern(const std::string& pattern, std::int64_t value,
                                 const std::string& where);
+
+/// The file names of a numbered data-file pattern "PATTERN LO HI STEP" (NRRD `data file`,
+/// MetaImage `ElementDataFile`): LO, LO+STEP, ... up to HI inclusive. Fails (naming `field`)
+/// on a zero step, a step pointing away from HI or more than 1,000,000 files; the arithmetic
+/// cannot overflow for any 64-bit LO, HI, STEP.
+std::vector<std::string> expand_file_pattern(const std::string& pattern, std::int64_t lo,
+                                             std::int64_t hi, std::int64_t step,
+                                             const std::string& where, const std::string& field);
 
 /// Spacing / direction from the three world-space axis vectors (columns of index → world):
 /// spacing = lengths, direction = normalised columns. Fails on a zero or non-finite vector or a

@@ -102,6 +102,8 @@ MeshFormat sniff_format(std::string_view data) {
 
 }  // namespace
 
+MeshFormat mesh_format_from_path(const std::string& path) { return format_from_extension(path); }
+
 MeshFormat mesh_format_for_writing(const std::string& path, const MeshWriteOptions& options) {
   MeshFormat format = options.format;
   if (format == MeshFormat::automatic) format = format_from_extension(path);

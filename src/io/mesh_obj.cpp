@@ -5,6 +5,7 @@
 // (vt, g, o, s, usemtl, l, ...) ignored. Normals are kept only when they map one-to-one onto the
 // vertices (every corner uses the same index for v and vn), as this writer produces.
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "io/mesh_formats.h"
@@ -70,6 +71,17 @@ bool parse_index(std::string_view s, std::int64_t count, std::int64_t& out) {
 }  // namespace
 
 Mesh read_obj(const std::string& path, std::string_view data) {
+  // OBJ is text: a control byte (other than tab, CR, LF, VT, FF) means a binary file named .obj,
+  // which would otherwise read as an empty mesh since unknown statements are skipped.
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    const auto c = static_cast<unsigned char>(data[i]);
+    if ((c < 0x20 && c != '\t' && c != '\n' && c != '\r' && c != '\v' && c != '\f') || c == 0x7f) {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "0x%02x", c);
+      bad_mesh(path, std::string("not a text OBJ file: control byte ") + hex + " at offset " +
+                         std::to_string(i));
+    }
+  }
   Mesh m;
   std::vector<float> vn;
   bool normals_match = true;  // every corner uses the same v and vn index

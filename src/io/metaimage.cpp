@@ -195,10 +195,8 @@ Volume read_metaimage(const std::string& path) {
     const std::int64_t hi = parse_int(toks[2], path, "ElementDataFile max");
     const std::int64_t step = parse_int(toks[3], path, "ElementDataFile step");
     if (toks.size() == 5) subdim = parse_int(toks[4], path, "ElementDataFile subdim");
-    if (step == 0 || (hi - lo) / step < 0 || (hi - lo) / step > 1000000)
-      fail_input(path, "invalid ElementDataFile range '" + df + "'");
-    for (std::int64_t i = lo; step > 0 ? i <= hi : i >= hi; i += step)
-      pieces.emplace_back(resolve_relative(path, format_file_pattern(toks[0], i, path)));
+    for (const auto& name : expand_file_pattern(toks[0], lo, hi, step, path, "ElementDataFile"))
+      pieces.emplace_back(resolve_relative(path, name));
   } else {
     pieces.emplace_back(resolve_relative(path, df));  // a single name (may contain spaces)
   }

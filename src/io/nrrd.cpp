@@ -245,10 +245,8 @@ Volume read_nrrd(const std::string& path) {
       const std::int64_t hi = parse_int(toks[2], path, "data file max");
       const std::int64_t step = parse_int(toks[3], path, "data file step");
       if (toks.size() == 5) subdim = parse_int(toks[4], path, "data file subdim");
-      if (step == 0 || (hi - lo) / step < 0 || (hi - lo) / step > 1000000)
-        fail_input(path, "invalid data file range '" + *df + "'");
-      for (std::int64_t i = lo; step > 0 ? i <= hi : i >= hi; i += step)
-        pieces.emplace_back(resolve_relative(path, format_file_pattern(toks[0], i, path)));
+      for (const auto& name : expand_file_pattern(toks[0], lo, hi, step, path, "data file"))
+        pieces.emplace_back(resolve_relative(path, name));
     } else {
       if (toks.size() != 1) fail_input(path, "malformed data file '" + *df + "'");
       pieces.emplace_back(resolve_relative(path, toks[0]));

@@ -162,6 +162,7 @@ std::string volume_format_for(const std::string& path, const RawOptions& raw) {
 Volume read_volume(const std::string& path, const RawOptions& raw) {
   if (raw.dims) {
     Volume v = detail::read_raw(path, raw);
+    check_world_range(v.grid, path);
     v.source = path;
     return v;
   }
@@ -193,6 +194,7 @@ Volume read_volume(const std::string& path, const RawOptions& raw) {
                          " but the content is " + format_name(sniffed));
   }
   Volume v = dispatch(f, path, raw);
+  check_world_range(v.grid, path);
   v.source = path;
   return v;
 }

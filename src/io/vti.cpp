@@ -93,9 +93,14 @@ BlockHeader read_block_header(const std::string& path, WordReader& w, std::uint6
   const std::uint64_t nblocks = w.next();
   h.block_size = w.next();
   h.last_size = w.next();
-  if (nblocks > available || (nblocks > 0 && h.block_size == 0) || h.last_size > h.block_size)
+  // The full blocks before the last one must fit in the extent: bounding (nblocks - 1) by
+  // expected / block_size first keeps (nblocks - 1) * block_size from wrapping around.
+  if (nblocks > available || (nblocks > 0 && h.block_size == 0) || h.last_size > h.block_size ||
+      (nblocks > 1 && (h.block_size > expected || nblocks - 1 > expected / h.block_size)))
     fail_input(path, "corrupt compression header (" + std::to_string(nblocks) + " blocks of " +
-                         std::to_string(h.block_size) + " bytes)");
+                         std::to_string(h.block_size) + " bytes, last " +
+                         std::to_string(h.last_size) + ", the extent needs " +
+                         std::to_string(expected) + ")");
   const std::uint64_t total =
       nblocks == 0 ? 0 : (nblocks - 1) * h.block_size + (h.last_size ? h.last_size : h.block_size);
   if (total != expected)

@@ -213,24 +213,33 @@ Volume read_vtk_legacy(const std::string& path) {
                key == "field") {
       if (section_count == 0 && key != "field") fail_input(path, toks[0] + " outside POINT_DATA/CELL_DATA");
       const auto n = static_cast<std::uint64_t>(section_count);
+      // Value counts of attribute arrays: a negative factor or a product beyond 2^56 (e.g. a
+      // LOOKUP_TABLE of 2^62 entries, whose 4*n wraps to 0) is a corrupt header, not an empty array.
+      const auto values = [&](std::uint64_t a, std::int64_t b, const std::string& what) {
+        constexpr std::uint64_t kMax = std::uint64_t(1) << 56;  // x 8 bytes still fits
+        if (b < 0 || a > kMax || (b > 0 && a > kMax / static_cast<std::uint64_t>(b)))
+          fail_input(path, "invalid " + what + " size (" + std::to_string(a) + " x " +
+                               std::to_string(b) + " values)");
+        return a * static_cast<std::uint64_t>(b);
+      };
       if (key == "scalars") {  // cell scalars: skip
         if (toks.size() < 3) fail_input(path, "SCALARS needs a name and a type");
-        const std::uint64_t comps = toks.size() >= 4 ? static_cast<std::uint64_t>(parse_int(toks[3], path, "SCALARS components")) : 1;
+        const std::int64_t comps = toks.size() >= 4 ? parse_int(toks[3], path, "SCALARS components") : 1;
         const std::string type = toks[2];
         skip_lookup_table_line();
-        skip_values(n * comps, type, "cell scalars");
+        skip_values(values(n, comps, "SCALARS"), type, "cell scalars");
       } else if (key == "vectors" || key == "normals" || key == "tensors") {
         if (toks.size() < 3) fail_input(path, toks[0] + " needs a name and a type");
-        skip_values(n * (key == "tensors" ? 9 : 3), toks[2], "attribute array");
+        skip_values(values(n, key == "tensors" ? 9 : 3, toks[0]), toks[2], "attribute array");
       } else if (key == "texture_coordinates") {
         if (toks.size() < 4) fail_input(path, "TEXTURE_COORDINATES needs a name, a dimension and a type");
-        skip_values(n * static_cast<std::uint64_t>(parse_int(toks[2], path, "TEXTURE_COORDINATES")), toks[3], "texture coordinates");
+        skip_values(values(n, parse_int(toks[2], path, "TEXTURE_COORDINATES"), "TEXTURE_COORDINATES"), toks[3], "texture coordinates");
       } else if (key == "color_scalars") {
         if (toks.size() < 3) fail_input(path, "COLOR_SCALARS needs a name and a count");
-        skip_values(n * static_cast<std::uint64_t>(parse_int(toks[2], path, "COLOR_SCALARS")), binary ? "unsigned_char" : "float", "color scalars");
+        skip_values(values(n, parse_int(toks[2], path, "COLOR_SCALARS"), "COLOR_SCALARS"), binary ? "unsigned_char" : "float", "color scalars");
       } else if (key == "lookup_table") {
         if (toks.size() < 3) fail_input(path, "LOOKUP_TABLE needs a name and a size");
-        skip_values(4 * static_cast<std::uint64_t>(parse_int(toks[2], path, "LOOKUP_TABLE")), binary ? "unsigned_char" : "float", "lookup table");
+        skip_values(values(4, parse_int(toks[2], path, "LOOKUP_TABLE"), "LOOKUP_TABLE"), binary ? "unsigned_char" : "float", "lookup table");
       } else {  // FIELD name numArrays, then per array: name components tuples type + data
         if (toks.size() < 3) fail_input(path, "FIELD needs a name and an array count");
         const std::int64_t arrays = parse_int(toks[2], path, "FIELD");
@@ -239,7 +248,7 @@ Volume read_vtk_legacy(const std::string& path) {
           const std::int64_t comps = parse_int(toks[1], path, "FIELD components");
           const std::int64_t tuples = parse_int(toks[2], path, "FIELD tuples");
           if (comps < 0 || tuples < 0) fail_input(path, "malformed FIELD array header");
-          skip_values(static_cast<std::uint64_t>(comps) * static_cast<std::uint64_t>(tuples), toks[3], "field array");
+          skip_values(values(static_cast<std::uint64_t>(comps), tuples, "FIELD array"), toks[3], "field array");
         }
       }
     } else if (key == "metadata") {

@@ -196,9 +196,11 @@ TopologyReport topology(const Mesh& mesh, const MetricsOptions& options) {
     auto free_index = [&](std::uint32_t s) {
       const std::uint32_t e = adj.side_edge[s];
       const auto k = std::lower_bound(free_edges.begin(), free_edges.end(), e) - free_edges.begin();
-      std::uint32_t i = adj.edge_offset[e];
-      while (adj.edge_sides[i] != s) ++i;
-      return free_base[static_cast<std::size_t>(k)] + (i - adj.edge_offset[e]);
+      // An edge's sides are in increasing id: a binary search, not a scan (a triangle repeated
+      // n times gives edges of valence n, and every side asks once: n² with a scan).
+      const std::uint32_t* first = adj.edge_sides.data() + adj.edge_offset[e];
+      const std::uint32_t* at = std::lower_bound(first, first + adj.edge_valence(e), s);
+      return free_base[static_cast<std::size_t>(k)] + static_cast<std::uint32_t>(at - first);
     };
     // partner[2f + end] = 2g + end_g: at the vertex where free side f has its end `end`
     // (0 = start, 1 = end), the boundary continues along free side g.

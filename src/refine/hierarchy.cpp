@@ -20,6 +20,7 @@
 #include <numeric>
 
 #include "adamesh/error.h"
+#include "adamesh/volume.h"
 #include "forest.h"
 #include "refine_internal.h"
 
@@ -192,9 +193,25 @@ void validate_hierarchy(const Hierarchy& h, const std::string& where) {
   if (h.base_border.size() != V0) fail_input(where, "border flags do not match the base vertices");
   if (!h.base_anchor.empty() && h.base_anchor.size() != V0)
     fail_input(where, "anchors do not match the base vertices");
-  for (const auto& p : h.base_positions)
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-      fail_input(where, "non-finite base vertex position");
+  if (!std::isfinite(h.iso)) fail_input(where, "the iso-value is not finite");
+  if (!(h.voxel >= kMinVoxelEdge && h.voxel <= kMaxWorldCoordinate))
+    fail_input(where, "the voxel size is not a positive length within 1e-18..1e18");
+  for (int a = 0; a < 3; ++a)
+    if (!(std::abs(h.bounds.lo[a]) <= kMaxWorldCoordinate &&
+          std::abs(h.bounds.hi[a]) <= kMaxWorldCoordinate && h.bounds.lo[a] <= h.bounds.hi[a]))
+      fail_input(where, "the domain bounds are not finite, ordered and within ±1e18");
+  const auto in_range = [](const Vec3& p) {
+    return std::abs(p.x) <= kMaxWorldCoordinate && std::abs(p.y) <= kMaxWorldCoordinate &&
+           std::abs(p.z) <= kMaxWorldCoordinate;  // false for NaN and inf
+  };
+  for (std::size_t v = 0; v < V0; ++v) {
+    if (!in_range(h.base_positions[v]))
+      fail_input(where, "base vertex " + std::to_string(v) +
+                            " has a non-finite position or one beyond ±1e18");
+    if (h.base_border[v] > 1)
+      fail_input(where, "base vertex " + std::to_string(v) + " has border flag " +
+                            std::to_string(h.base_border[v]) + " (0 or 1 expected)");
+  }
   for (std::size_t t = 0; t < h.base_triangles.size(); ++t) {
     const auto& x = h.base_triangles[t];
     if (x[0] >= V0 || x[1] >= V0 || x[2] >= V0 || x[0] == x[1] || x[1] == x[2] || x[0] == x[2])
@@ -209,8 +226,7 @@ void validate_hierarchy(const Hierarchy& h, const std::string& where) {
                             "compatible)");
   for (std::size_t s = 0; s < h.splits.size(); ++s) {
     const auto& sp = h.splits[s];
-    if (!std::isfinite(sp.position.x) || !std::isfinite(sp.position.y) ||
-        !std::isfinite(sp.position.z) || !std::isfinite(sp.error) || sp.error < 0)
+    if (!in_range(sp.position) || !std::isfinite(sp.error) || sp.error < 0)
       fail_input(where, "split " + std::to_string(s) + " has a non-finite position or error");
     if (s > 0 && sp.error > h.splits[s - 1].error)
       fail_input(where, "split " + std::to_string(s) + ": errors are not in decreasing order");

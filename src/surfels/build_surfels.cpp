@@ -513,6 +513,9 @@ SurfelComplex build_surfels(const Volume& volume, double iso, double inside_sign
     fail(Status::invalid_input, "build_surfels: the iso-value must be finite");
   if (!(inside_sign == 1 || inside_sign == -1))
     fail(Status::invalid_input, "build_surfels: inside_sign must be +1 or -1");
+  // Volumes built by hand bypass the readers' check: positions beyond the float range would give
+  // inf vertices (mc) and a NaN surface area (the disk cover).
+  check_world_range(volume.grid, volume.source.empty() ? "build_surfels" : volume.source);
   SurfelComplex out;
   out.grid = volume.grid;
   out.iso = iso;
