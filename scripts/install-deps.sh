@@ -3,6 +3,7 @@
 #   scripts/install-deps.sh          build + test dependencies
 #   scripts/install-deps.sh --bench  also the benchmark peers and plotting tools
 #   scripts/install-deps.sh --full   also VTK and CGAL (opt-in peers of `make bench-full`)
+#   scripts/install-deps.sh --fuzz   also clang-14 and its libFuzzer runtime (`make fuzz`)
 set -euo pipefail
 
 pkgs=(
@@ -22,6 +23,7 @@ pkgs=(
 case "${1:-}" in
   --bench) pkgs+=(gnuplot-nox) ;;
   --full)  pkgs+=(gnuplot-nox libvtk9-dev libcgal-dev) ;;
+  --fuzz)  pkgs+=(clang-14 libclang-rt-14-dev) ;;
 esac
 
 # The web viewer and its tests (viewer/package.json): node + npm (from Debian unless a node is
