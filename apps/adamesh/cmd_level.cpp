@@ -39,8 +39,8 @@ int cmd_level(const Argv& argv) {
     fail(Status::usage, "adamesh level: give exactly one of --level, --max-error, --triangles, --all");
   const auto out = args.get("-o");
   if (!out) fail(Status::usage, "adamesh level: -o FILE is required");
-  const MeshWriteOptions wo = mesh_output_options(args, *out);
   check_outputs("level", args, {{"-o", OutputKind::mesh}});
+  const MeshWriteOptions wo = mesh_output_options(args, *out);
 
   const std::string path = args.positionals()[0];
   HierarchyReadOptions ro;

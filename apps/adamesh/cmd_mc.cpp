@@ -55,8 +55,8 @@ int cmd_mc(const Argv& argv) {
   const std::int64_t threads = args.get_int("--threads").value_or(0);
   if (threads < 0 || threads > 4096)
     fail(Status::usage, "adamesh mc: --threads must be between 0 and 4096");
-  const MeshWriteOptions write_options = mesh_output_options(args, *out_path);
   check_outputs("mc", args, {{"-o", OutputKind::mesh}});  // before any work
+  const MeshWriteOptions write_options = mesh_output_options(args, *out_path);
 
   const auto t_load = std::chrono::steady_clock::now();
   const Input in = load_input(args.positionals()[0], input_options_from(args));

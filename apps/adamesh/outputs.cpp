@@ -30,8 +30,7 @@ void check_outputs(const std::string& command, const Args& args,
     if (!path) continue;
     const std::string where = "adamesh " + command + ": " + o.option + " " + *path;
     if (path->empty()) fail(Status::usage, "adamesh " + command + ": " + o.option + " needs a file name");
-    if (o.kind == OutputKind::mesh && mesh_format_from_path(*path) == MeshFormat::automatic)
-      fail(Status::usage, where + ": unknown mesh format (use the extension .ply, .obj, .off or .stl)");
+    if (o.kind == OutputKind::mesh) (void)mesh_format_for_writing(*path);  // unsupported (3)
     if (o.kind == OutputKind::hierarchy && lower_extension(*path) != ".amh")
       fail(Status::usage, where + ": a hierarchy file needs the extension .amh");
     const std::string key = std::filesystem::absolute(*path).lexically_normal().string();

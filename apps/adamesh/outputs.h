@@ -21,11 +21,11 @@ struct OutputSpec {
   OutputKind kind;
 };
 
-/// For each given option of `outputs`: the file name has a known extension (meshes: .ply .obj
-/// .off .stl and whatever write_mesh() supports; hierarchies: .amh), no two options name the
-/// same file, and the target can be written (check_output_target: absent or a regular file, in
-/// an existing writable folder). Throws usage (1) for a name problem, output_failed (4) for an
-/// unwritable target, with "adamesh COMMAND: OPTION PATH: ..." messages.
+/// For each given option of `outputs`: the file name has a known extension (meshes: whatever
+/// write_mesh() supports, else unsupported (3); hierarchies: .amh, else usage (1)), no two options
+/// name the same file (usage), and the target can be written (check_output_target: absent or a
+/// regular file, in an existing writable folder; else output_failed (4), with
+/// "adamesh COMMAND: OPTION PATH: ..." messages).
 void check_outputs(const std::string& command, const Args& args,
                    const std::vector<OutputSpec>& outputs);
 
