@@ -4,7 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
+#include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -169,4 +172,45 @@ TEST(Extract, FromALoadedInput) {
   EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
   EXPECT_EQ(a.report.input, "shape:torus");
   EXPECT_NE(report_json(a.report).find("\"chosen\": \"--triangles 3000\""), std::string::npos);
+}
+
+TEST(Extract, FromBorrowedSamples) {
+  // The Python module's path: samples owned elsewhere (a numpy array), borrowed without a copy.
+  const Input ref = load_input("shape:genus2");
+  const Volume& v = *ref.volume;
+  const std::size_t bytes = v.data.size();
+  auto owner = std::make_shared<std::vector<std::byte>>(v.data.data(), v.data.data() + bytes);
+  Volume borrowed;
+  borrowed.grid = v.grid;
+  borrowed.type = v.type;
+  borrowed.data = SampleBuffer(owner->data(), bytes, owner);
+  EXPECT_TRUE(borrowed.data.borrowed());
+  EXPECT_EQ(borrowed.data.data(), owner->data());
+  const Input in = make_input(std::move(borrowed), "<array>", -1);
+  EXPECT_EQ(in.volume->data.data(), owner->data());  // still not copied
+  EXPECT_FALSE(in.default_iso);
+  // The same samples in an owned buffer (a sampled field, not the analytic shape).
+  Volume owned;
+  owned.grid = v.grid;
+  owned.type = v.type;
+  owned.data = SampleBuffer(bytes);
+  std::copy(v.data.data(), v.data.data() + bytes, owned.data.data());
+  EXPECT_FALSE(owned.data.borrowed());
+  const Input copy = make_input(std::move(owned), "<copy>", -1);
+  ExtractOptions o;
+  o.iso = 0.0;
+  o.budget = Budget::triangles;
+  o.triangles = 3000;
+  const ExtractResult a = extract(in, o), b = extract(copy, o);
+  EXPECT_EQ(a.mesh.positions, b.mesh.positions);
+  EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
+  EXPECT_EQ(a.report.input, "<array>");
+  // NaN samples: rejected with the input's name, or replaced (in the buffer given).
+  std::vector<float> nan(8, 1.0f);
+  nan[5] = std::numeric_limits<float>::quiet_NaN();
+  Volume tiny;
+  tiny.grid.dims = {2, 2, 2};
+  tiny.type = ScalarType::f32;
+  tiny.data = SampleBuffer(reinterpret_cast<std::byte*>(nan.data()), 32, nullptr);
+  EXPECT_EQ(status_of([&] { make_input(std::move(tiny), "<array>"); }), Status::invalid_input);
 }

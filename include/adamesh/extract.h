@@ -123,8 +123,10 @@ struct ExtractResult {
   ExtractReport report;
 };
 
-/// Runs the pipeline on a loaded input (load_input()). The volume is read, not copied; the
-/// input must stay valid during the call.
+/// Runs the pipeline on a loaded input (load_input(), make_input()). The volume is read, not
+/// copied; the input must stay valid during the call. Memory: the first call sets glibc's
+/// M_MMAP_THRESHOLD to 1 MiB (process-wide), so that the arrays the stages free go back to the
+/// system; the freed memory of all malloc arenas is returned between stages (malloc_trim).
 /// \throw Error(usage) for invalid options (message names the option); Error(invalid_input) when
 ///        the iso-value is missing for a volume file, outside the value range, or gives no surface;
 ///        Error(cancelled) when options.context.cancel is set; other Errors from the stages.

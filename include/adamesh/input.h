@@ -87,6 +87,13 @@ Input fill_cavities(const Input& in, double iso, std::int64_t max_voxels, Cavity
 /// True for `shape:NAME` and `expr:EXPR` (implicit inputs: sampled fields, default iso-value 0).
 bool is_implicit_spec(const std::string& spec) noexcept;
 
+/// An input from samples already in memory (the Python module's numpy volumes), named `spec` in
+/// messages: NaN/Inf samples as load_input() treats them (options.nan_value replaces them in
+/// place), the trilinear field, inside_sign (+1: bright is inside; -1: negative is inside, as in
+/// signed distance fields), options.flip_inside. No default iso-value.
+Input make_input(Volume volume, const std::string& spec, double inside_sign = 1,
+                 const InputOptions& options = {});
+
 /// Names of the built-in shapes (`shape:NAME`).
 std::vector<std::string> shape_names();
 

@@ -15,6 +15,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 
 #include "adamesh/vec.h"
 
@@ -78,17 +79,32 @@ inline constexpr double kMinVoxelEdge = 1e-18;
 /// ±kMaxWorldCoordinate and every voxel edge is finite and at least kMinVoxelEdge long.
 void check_world_range(const Grid& grid, const std::string& where);
 
-/// Uninitialised, owned byte buffer (no zero-fill of large volumes).
+/// Uninitialised, owned byte buffer (no zero-fill of large volumes), or borrowed memory kept
+/// alive by its owner (the Python module's numpy arrays: no copy).
 class SampleBuffer {
  public:
   SampleBuffer() = default;
   explicit SampleBuffer(std::size_t bytes);
-  std::byte* data() noexcept { return data_.get(); }
-  const std::byte* data() const noexcept { return data_.get(); }
+  /// Borrows `bytes` bytes at `data`; `owner` keeps them alive as long as the buffer exists.
+  SampleBuffer(std::byte* data, std::size_t bytes, std::shared_ptr<const void> owner) noexcept
+      : owner_(std::move(owner)), ptr_(data), size_(bytes) {}
+  SampleBuffer(SampleBuffer&& o) noexcept { *this = std::move(o); }
+  SampleBuffer& operator=(SampleBuffer&& o) noexcept {
+    data_ = std::move(o.data_);
+    owner_ = std::move(o.owner_);
+    ptr_ = std::exchange(o.ptr_, nullptr);
+    size_ = std::exchange(o.size_, 0);
+    return *this;
+  }
+  std::byte* data() noexcept { return ptr_; }
+  const std::byte* data() const noexcept { return ptr_; }
   std::size_t size() const noexcept { return size_; }
+  bool borrowed() const noexcept { return owner_ != nullptr; }
 
  private:
   std::unique_ptr<std::byte[]> data_;
+  std::shared_ptr<const void> owner_;
+  std::byte* ptr_ = nullptr;
   std::size_t size_ = 0;
 };
 

@@ -127,6 +127,7 @@ bool Grid::axis_aligned() const noexcept { return direction == Mat3::identity();
 SampleBuffer::SampleBuffer(std::size_t bytes)
     : data_(new (std::nothrow) std::byte[bytes == 0 ? 1 : bytes]), size_(bytes) {
   if (!data_) throw std::bad_alloc();
+  ptr_ = data_.get();
 }
 
 double Volume::at(std::int64_t linear) const noexcept {

@@ -92,6 +92,24 @@ std::int64_t handle_nonfinite(Volume& v, const std::string& spec, const InputOpt
 
 }  // namespace
 
+Input make_input(Volume volume, const std::string& spec, double inside_sign,
+                 const InputOptions& options) {
+  if (options.nan_value && !std::isfinite(*options.nan_value))
+    fail(Status::usage, spec + ": --nan-value must be a finite number");
+  if (inside_sign != 1 && inside_sign != -1)
+    fail(Status::usage, spec + ": inside_sign must be +1 or -1");
+  checked_volume_bytes(volume.grid.dims, volume.type, spec);
+  if (volume.data.size() < scalar_size(volume.type) * static_cast<std::size_t>(volume.grid.num_samples()))
+    fail(Status::usage, spec + ": fewer samples than the grid has");
+  Input in;
+  in.spec = spec;
+  in.nonfinite_samples = handle_nonfinite(volume, spec, options);
+  in.volume = std::make_shared<const Volume>(std::move(volume));
+  in.field = make_volume_field(in.volume);
+  in.inside_sign = options.flip_inside ? -inside_sign : inside_sign;
+  return in;
+}
+
 bool is_implicit_spec(const std::string& spec) noexcept {
   return spec.rfind("shape:", 0) == 0 || spec.rfind("expr:", 0) == 0;
 }
