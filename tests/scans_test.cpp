@@ -1,6 +1,6 @@
 // Real scans (issue 12, docs/QUALITY.md): on the shared volumes the adaptive meshes keep their
 // triangle budget, keep marching cubes' topology, stay inside the volume's box and are well
-// shaped. Uses ../shared/data (skips without it); label "scans" (about a minute).
+// shaped. Uses ../shared/data (skips without it); about a minute.
 #include <gtest/gtest.h>
 
 #include <filesystem>
