@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <string>
 
+#include "adamesh/context.h"
+
 namespace adamesh::cli {
 
 /// Peak resident set size of this process in MiB.
@@ -69,20 +71,5 @@ class Progress {
 };
 
 inline bool Progress::isatty_stderr() { return isatty(2) != 0; }
-
-/// Wall-clock stopwatch in seconds.
-class Stopwatch {
- public:
-  Stopwatch() : t0_(std::chrono::steady_clock::now()) {}
-  double lap() {
-    const auto now = std::chrono::steady_clock::now();
-    const double s = std::chrono::duration<double>(now - t0_).count();
-    t0_ = now;
-    return s;
-  }
-
- private:
-  std::chrono::steady_clock::time_point t0_;
-};
 
 }  // namespace adamesh::cli

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <functional>
 
 namespace adamesh {
@@ -28,6 +29,20 @@ struct ExecutionContext {
   void check_cancelled() const;
   /// check_cancelled(), then progress(stage, fraction) when a callback is set.
   void report(const char* stage, double fraction) const;
+};
+
+/// Wall-clock stopwatch in seconds: lap() returns the time since construction or the last lap.
+class Stopwatch {
+ public:
+  double lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double s = std::chrono::duration<double>(now - t0_).count();
+    t0_ = now;
+    return s;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
 };
 
 }  // namespace adamesh

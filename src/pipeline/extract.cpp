@@ -29,19 +29,6 @@ namespace adamesh {
 
 namespace {
 
-class Stopwatch {
- public:
-  double lap() {
-    const auto now = std::chrono::steady_clock::now();
-    const double s = std::chrono::duration<double>(now - t0_).count();
-    t0_ = now;
-    return s;
-  }
-
- private:
-  std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
-};
-
 /// Returns the freed memory of all malloc arenas to the system: the stages free large arrays
 /// and the worker threads' arenas keep their freed slab buffers otherwise.
 void release_freed_memory() { malloc_trim(0); }
