@@ -48,6 +48,9 @@ std::vector<OptionSpec> extract_specs() {
       {"--format", true, "with --labels all: mesh format of the files (ply obj off stl; default ply)"},
       {"--min-cavity", true,
        "topology control: fill cavities (enclosed pockets of outside) of fewer voxels than this"},
+      {"--max-handle", true,
+       "topology control: cut handles and plug tunnels whose shortest loop is shorter than L "
+       "voxels (strands thinner than L/pi; docs/TOPOLOGY.md)"},
       {"--no-improve", false,
        "no shape improvement of M0 and of the written mesh (flips, moves, collapses; "
        "docs/QUALITY.md): the output is the hierarchy's cut as it is"},
@@ -102,6 +105,11 @@ ExtractOptions extract_options(const Args& args, const std::string& spec) {
   if (auto c = args.get_int("--min-cavity")) {
     if (*c < 0) fail(Status::usage, "adamesh extract: --min-cavity must be >= 0");
     opt.min_cavity = *c;
+  }
+  if (auto h = args.get_double("--max-handle")) {
+    if (!(*h >= 0) || !std::isfinite(*h))
+      fail(Status::usage, "adamesh extract: --max-handle must be a length >= 0 (voxels)");
+    opt.max_handle = *h;
   }
   opt.measure_levels = args.has("--report");
   return opt;

@@ -8,7 +8,7 @@
 
 namespace adamesh {
 
-/// Progress report: the stage's name ("read", "cavities", "surfels", "graph", "disk cover",
+/// Progress report: the stage's name ("read", "handles", "cavities", "surfels", "graph", "disk cover",
 /// "dual", "improve M0", "refine", "improve", "measure") and the fraction of it done, in [0, 1].
 /// Called on the calling thread, never from a worker thread, with fraction 0 when a stage begins
 /// and 1 when it ends.

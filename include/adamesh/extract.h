@@ -54,6 +54,9 @@ struct ExtractOptions {
   /// Fill cavities (enclosed pockets of outside, 6-connected) with fewer samples than this before
   /// extraction (fill_cavities()); 0 = keep them. Voxels.
   std::int64_t min_cavity = 0;
+  /// Cut handles and plug tunnels whose shortest non-separating loop is shorter than about this
+  /// many voxels (remove_handles()) before extraction, then fill cavities; 0 = keep them.
+  double max_handle = 0;
 
   // ---- Shape (docs/QUALITY.md).
   /// Improve the shape of M0 before the blocks are built and of the output mesh (adaptive
@@ -105,6 +108,7 @@ struct ExtractReport {
   int depth = 0;                    ///< deepest triangle level of the output mesh
   std::vector<LevelReport> levels;  ///< when measure_levels
   CavityReport cavities;            ///< ExtractOptions::min_cavity
+  HandleReport handles;             ///< ExtractOptions::max_handle
   ImproveStats base_improve;        ///< shape improvement (and decimation) of M0
   ImproveStats improve;             ///< shape improvement of the output mesh
   /// Seconds per stage: surfels, graph, disk_cover, voronoi, dual, refine (read: load + the

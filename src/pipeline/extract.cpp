@@ -60,6 +60,8 @@ void check_options(const ExtractOptions& o) {
     case Budget::none:
     case Budget::automatic: break;
   }
+  if (!(o.max_handle >= 0) || !std::isfinite(o.max_handle))
+    fail(Status::usage, "extract: max_handle must be a length >= 0 (voxels)");
 }
 
 /// The iso-value to use; fails when it is missing, not finite or gives an empty surface.
@@ -159,7 +161,8 @@ std::string unreachable_budget_note(const BaseMesh& base, const ConnectivityGrap
       << " surfels: --min-component " << surfels[comps[i]] << " reaches it";
   else if (topo.euler < 0)
     s << "; most of them go to handles and tunnels (χ " << topo.euler
-      << "): --min-cavity V fills small cavities, --min-component S drops small components";
+      << "): --max-handle L cuts handles shorter than L voxels, --min-cavity V fills small "
+         "cavities, --min-component S drops small components";
   else
     s << "; a larger --rmax gives a coarser base mesh";
   return s.str();
@@ -173,15 +176,22 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
   auto& rss = rep.peak_rss_after_mb;
   Stopwatch clock;
 
-  // 1. check; topology control in the volume (cavities filled on a copy)
+  // 1. check; topology control in the volume (handles cut, cavities filled, on a copy)
   const double iso = checked_iso(input, o);
-  Input filled;
+  // Handles first: plugging a tube at both ends makes a cavity.
+  Input controlled;
+  if (o.max_handle > 0) {
+    ctx.report("handles", 0);
+    controlled = remove_handles(input, iso, o.max_handle, rep.handles);
+    ctx.report("handles", 1);
+  }
   if (o.min_cavity > 0) {
     ctx.report("cavities", 0);
-    filled = fill_cavities(input, iso, o.min_cavity, rep.cavities);
+    controlled = fill_cavities(o.max_handle > 0 ? controlled : input, iso, o.min_cavity,
+                               rep.cavities);
     ctx.report("cavities", 1);
   }
-  const Input& in = o.min_cavity > 0 ? filled : input;
+  const Input& in = o.max_handle > 0 || o.min_cavity > 0 ? controlled : input;
   rep.input = in.spec;
   rep.iso = iso;
   timings["read"] = read_s + clock.lap();

@@ -100,7 +100,14 @@ std::string report_json(const ExtractReport& rep) {
   r["topology_control"] = {{"cavities_filled", rep.cavities.filled},
                            {"cavity_voxels_filled", rep.cavities.filled_voxels},
                            {"largest_cavity_filled", rep.cavities.largest_filled},
-                           {"components_dropped", st.dropped_components}};
+                           {"components_dropped", st.dropped_components},
+                           {"max_handle_radius", rep.handles.radius},
+                           {"handles_cut", rep.handles.handles_cut},
+                           {"handle_voxels_cut", rep.handles.cut_voxels},
+                           {"tunnels_filled", rep.handles.tunnels_filled},
+                           {"tunnel_voxels_filled", rep.handles.plug_voxels},
+                           {"inside_euler_before", rep.handles.inside_euler_before},
+                           {"inside_euler_after", rep.handles.inside_euler_after}};
   r["fallback_components"] = st.fallback_components;
   r["dropped_components"] = st.dropped_components;
   r["covering"] = {{"r_max", st.r_max},
@@ -140,6 +147,11 @@ std::string report_json(const ExtractReport& rep) {
 std::string base_summary(const ExtractReport& rep) {
   const TopologyReport& topo = rep.base_topology;
   std::ostringstream s;
+  if (rep.handles.radius > 0)
+    s << "cut " << rep.handles.handles_cut << " handles (" << rep.handles.cut_voxels
+      << " voxels) and plugged " << rep.handles.tunnels_filled << " tunnels ("
+      << rep.handles.plug_voxels << " voxels), χ of the inside " << rep.handles.inside_euler_before << " -> "
+      << rep.handles.inside_euler_after << "; ";
   if (rep.cavities.filled > 0)
     s << "filled " << rep.cavities.filled << " cavities (" << rep.cavities.filled_voxels
       << " voxels, the largest " << rep.cavities.largest_filled << "); ";
