@@ -143,7 +143,7 @@ TEST(Topology, OpenSquare) {
   EXPECT_EQ(t.boundary_edges, 4);
   EXPECT_FALSE(t.closed);
   EXPECT_TRUE(t.oriented);
-  EXPECT_FALSE(t.component_list[0].genus.has_value());  // genus only for closed components
+  EXPECT_EQ(t.component_list[0].genus, 0);  // a disk: χ 1 = 2 − 2g − 1
   EXPECT_EQ(t.genus, 0);
   EXPECT_FALSE(enclosed_volume(m, t).has_value());
 }

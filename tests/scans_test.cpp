@@ -217,6 +217,41 @@ TEST(TopologyControl, MinCavityFillsSmallCavities) {
   EXPECT_EQ(rep["topology_control"]["largest_cavity_filled"], 125);
 }
 
+// --max-handle on the MRI scalp (avg152T1 at iso 10.5, issue 12's example): ~770 handles of
+// noise around one head. With the small components and cavities gone and the handles shorter
+// than 12 voxels cut, one surface is left, with a handful of handles, and --triangles 5000 is
+// reached (without --max-handle it is out of reach: 14,307 triangles at χ −1534).
+TEST(TopologyControl, MaxHandleCleansTheMriScalp) {
+  ADAMESH_REQUIRE_SHARED_DATA(data);
+  TempDir tmp;
+  const std::string in = data + "/mri_avg152T1/avg152T1_RL_nifti.nii.gz --iso 10.5 --triangles 5000 " +
+                         "--min-component 400 --min-cavity 1000 -o " + tmp.file("a.ply") +
+                         " --report " + tmp.file("r.json");
+  const auto plain = run_cli("extract " + in);
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  const auto t0 = mesh_topo(read_mesh(tmp.file("a.ply")));
+  const long genus0 = (2 * t0.components - t0.boundary_loops - t0.chi) / 2;
+  EXPECT_GT(genus0, 500);
+  EXPECT_NE(plain.err.find("--max-handle L cuts handles"), std::string::npos) << plain.err;
+  const auto r = run_cli("extract " + in + " --max-handle 12");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE((r.out + r.err).find("handles ("), std::string::npos) << r.out;
+  const Mesh a = read_mesh(tmp.file("a.ply"));
+  const auto t = mesh_topo(a);
+  EXPECT_EQ(t.components, 1);
+  EXPECT_EQ(t.nonmanifold_edges, 0);
+  const long genus = (2 * t.components - t.boundary_loops - t.chi) / 2;
+  EXPECT_LE(genus, 4);
+  EXPECT_LE(a.num_triangles(), 5000u);
+  EXPECT_GE(a.num_triangles(), 4950u);
+  const auto rep = nlohmann::json::parse(testutil::read_bytes(tmp.file("r.json")));
+  const auto& tc = rep["topology_control"];
+  EXPECT_GT(tc["handles_cut"].get<long>(), 100);
+  EXPECT_GT(tc["tunnels_filled"].get<long>(), 50);
+  EXPECT_NEAR(tc["max_handle_radius"].get<double>(), 12 / (2 * 3.141592653589793), 1e-9);
+  EXPECT_EQ(run_cli("extract " + in + " --max-handle -2").exit_code, 1);
+}
+
 }  // namespace
 }  // namespace adamesh
 

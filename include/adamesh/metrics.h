@@ -34,7 +34,8 @@ struct ComponentTopology {
   bool manifold = false;    ///< no non-manifold edge or vertex
   bool orientable = false;  ///< a consistent orientation exists (through manifold edges)
   bool oriented = false;    ///< no inconsistently oriented edge
-  /// (2 − euler)/2 when the component is closed, manifold and orientable; empty otherwise.
+  /// (2 − euler − boundary_loops)/2 when the component is manifold and orientable (closed or
+  /// with boundary); empty otherwise.
   std::optional<std::int64_t> genus;
 };
 

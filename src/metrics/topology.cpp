@@ -371,8 +371,8 @@ TopologyReport topology(const Mesh& mesh, const MetricsOptions& options) {
 
     for (auto& c : cl) {
       c.euler = c.vertices - c.edges + c.triangles;
-      if (c.closed && c.manifold && c.orientable) {
-        c.genus = (2 - c.euler) / 2;
+      if (c.manifold && c.orientable) {  // χ = 2 − 2g − b
+        c.genus = (2 - c.euler - c.boundary_loops) / 2;
         r.genus += *c.genus;
       }
     }
