@@ -111,8 +111,9 @@ struct ExtractReport {
   HandleReport handles;             ///< ExtractOptions::max_handle
   ImproveStats base_improve;        ///< shape improvement (and decimation) of M0
   ImproveStats improve;             ///< shape improvement of the output mesh
-  /// Seconds per stage: surfels, graph, disk_cover, voronoi, dual, refine (read: load + the
-  /// iso-value check; write: filled by callers that write files).
+  /// Seconds per stage: topology_control (with max_handle or min_cavity), surfels, graph,
+  /// disk_cover, voronoi, dual, improve_base, refine, improve (read: load + the iso-value check;
+  /// write: filled by callers that write files).
   std::map<std::string, double> timings_s;
   /// Peak resident set size of the process (MiB) at the end of each stage, and at the end.
   std::map<std::string, double> peak_rss_after_mb;

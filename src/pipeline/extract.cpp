@@ -159,10 +159,11 @@ std::string unreachable_budget_note(const BaseMesh& base, const ConnectivityGrap
   if (total <= n && i < comps.size())
     s << "; " << dropped << " of them have fewer than " << surfels[comps[i]]
       << " surfels: --min-component " << surfels[comps[i]] << " reaches it";
-  else if (topo.euler < 0)
-    s << "; most of them go to handles and tunnels (χ " << topo.euler
-      << "): --max-handle L cuts handles shorter than L voxels, --min-cavity V fills small "
-         "cavities, --min-component S drops small components";
+  else if (topo.genus > 0 || topo.euler < 0)
+    s << "; the largest alone has " << tris[comps.back()] << " and the surfaces have "
+      << topo.genus << " handles: --max-handle L cuts handles and tunnels shorter than L "
+      << "voxels, --min-component S drops components of fewer than S surfels, --min-cavity V "
+         "fills cavities of fewer than V voxels";
   else
     s << "; a larger --rmax gives a coarser base mesh";
   return s.str();
@@ -178,6 +179,7 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
 
   // 1. check; topology control in the volume (handles cut, cavities filled, on a copy)
   const double iso = checked_iso(input, o);
+  timings["read"] = read_s + clock.lap();
   // Handles first: plugging a tube at both ends makes a cavity.
   Input controlled;
   if (o.max_handle > 0) {
@@ -194,7 +196,7 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
   const Input& in = o.max_handle > 0 || o.min_cavity > 0 ? controlled : input;
   rep.input = in.spec;
   rep.iso = iso;
-  timings["read"] = read_s + clock.lap();
+  if (o.max_handle > 0 || o.min_cavity > 0) timings["topology_control"] = clock.lap();
   rss["read"] = peak_rss_mb();
 
   // 2. surfels
