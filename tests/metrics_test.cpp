@@ -566,3 +566,58 @@ TEST(MetricsPerf, DISABLED_BigSphere) {
   std::printf("hausdorff    %s mesh against itself (symmetric %.3g)\n", clock.lap().c_str(), self.symmetric);
   EXPECT_EQ(t.euler, 2);
 }
+
+// ----------------------------------------------------------------- self-intersections
+
+TEST(SelfIntersections, CleanMeshesHaveNone) {
+  EXPECT_EQ(self_intersections(cube()).pairs, 0);
+  EXPECT_EQ(self_intersections(icosphere(3)).pairs, 0);
+  EXPECT_EQ(self_intersections(torus(24, 12)).pairs, 0);
+  // Two spheres apart, and a flat grid (coplanar neighbours everywhere).
+  EXPECT_EQ(self_intersections(merged(icosphere(2), icosphere(2, 1, {3, 0, 0}))).pairs, 0);
+  EXPECT_EQ(self_intersections(uv_sphere(16, 8)).pairs, 0);
+}
+
+TEST(SelfIntersections, CrossingTrianglesWithoutSharedVertices) {
+  // A vertical triangle piercing a horizontal one.
+  const Mesh m = from({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5, 0.5, -1}, {0.5, 0.5, 1}, {1.5, 1.5, 1}},
+                      {{0, 1, 2}, {3, 4, 5}});
+  const IntersectionReport r = self_intersections(m, 10);
+  EXPECT_EQ(r.pairs, 1);
+  ASSERT_EQ(r.first_pairs.size(), 1u);
+  EXPECT_EQ(r.first_pairs[0], (std::pair<std::uint32_t, std::uint32_t>{0, 1}));
+  // Moved away: none.
+  const Mesh far = from({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {5, 5, -1}, {5, 5, 1}, {6, 6, 1}},
+                        {{0, 1, 2}, {3, 4, 5}});
+  EXPECT_EQ(self_intersections(far).pairs, 0);
+  // Two spheres overlapping: their surfaces cross along a circle.
+  EXPECT_GT(self_intersections(merged(icosphere(2), icosphere(2, 1, {1, 0, 0}))).pairs, 10);
+}
+
+TEST(SelfIntersections, SharedVertexCountsOnlyContactsElsewhere) {
+  // Fan of two triangles around vertex 0 that do not cross: none.
+  const Mesh ok = from({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0.2}, {0, -1, 0.2}},
+                       {{0, 1, 2}, {0, 3, 4}});
+  EXPECT_EQ(self_intersections(ok).pairs, 0);
+  // The second triangle's far edge passes through the first: one.
+  const Mesh bad = from({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.6, 0.3, -1}, {0.3, 0.6, 1}},
+                        {{0, 1, 2}, {0, 3, 4}});
+  EXPECT_EQ(self_intersections(bad).pairs, 1);
+}
+
+TEST(SelfIntersections, SharedEdgeCountsOnlyFolds) {
+  // A hinge at 90 degrees: fine; folded flat onto itself: one.
+  const Mesh hinge = from({{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, 0, 1}}, {{0, 1, 2}, {1, 0, 3}});
+  EXPECT_EQ(self_intersections(hinge).pairs, 0);
+  const Mesh fold = from({{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.4, 0.6, 0}}, {{0, 1, 2}, {1, 0, 3}});
+  EXPECT_EQ(self_intersections(fold).pairs, 1);
+  const Mesh flat = from({{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, -1, 0}}, {{0, 1, 2}, {1, 0, 3}});
+  EXPECT_EQ(self_intersections(flat).pairs, 0);
+}
+
+TEST(SelfIntersections, InStatsJson) {
+  const Mesh m = from({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5, 0.5, -1}, {0.5, 0.5, 1}, {1.5, 1.5, 1}},
+                      {{0, 1, 2}, {3, 4, 5}});
+  EXPECT_EQ(mesh_report(m).self_intersecting_pairs, 1);
+  EXPECT_NE(report_json(mesh_report(m)).find("\"self_intersecting_pairs\": 1"), std::string::npos);
+}

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "adamesh/field.h"
@@ -167,6 +168,21 @@ struct HausdorffReport {
 /// symmetric Hausdorff distance. A mesh without triangles is at infinite distance.
 HausdorffReport hausdorff(const Mesh& a, const Mesh& b, const HausdorffOptions& options = {});
 
+// ---------------------------------------------------------------------- self-intersections
+
+struct IntersectionReport {
+  std::int64_t pairs = 0;  ///< triangle pairs that meet other than in what they share
+  /// The first pairs (lowest triangle indices), at most keep_pairs of them.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> first_pairs;
+};
+
+/// Pairs of triangles that intersect: without a common vertex, any contact; with one common
+/// vertex, a contact elsewhere; with a common edge, a fold onto each other. Duplicate and
+/// collapsed triangles are not counted (they are topology findings). Double-precision orientation
+/// tests with a relative tolerance: a contact within it counts (docs/METRICS.md).
+IntersectionReport self_intersections(const Mesh& mesh, std::size_t keep_pairs = 0,
+                                      const MetricsOptions& options = {});
+
 // ---------------------------------------------------------------------- reports
 
 /// Everything `adamesh stats` prints.
@@ -178,6 +194,7 @@ struct MeshReport {
   Box bounds;
   std::optional<FieldErrorReport> field;
   std::optional<HausdorffReport> hausdorff;
+  std::int64_t self_intersecting_pairs = 0;  ///< self_intersections(mesh).pairs
 };
 
 /// Topology, quality, area and volume (field and hausdorff are left empty).

@@ -141,6 +141,7 @@ MeshReport mesh_report(const Mesh& mesh, const MetricsOptions& options) {
   r.area = surface_area(mesh, options);
   r.volume = enclosed_volume(mesh, r.topology, options);
   r.bounds = mesh.bounds();
+  r.self_intersecting_pairs = self_intersections(mesh, 0, options).pairs;
   return r;
 }
 

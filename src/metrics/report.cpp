@@ -50,6 +50,7 @@ std::string report_json(const MeshReport& r) {
   j["inconsistent_edges"] = t.inconsistent_edges;
   j["unreferenced_vertices"] = t.unreferenced_vertices;
   j["collapsed_triangles"] = t.collapsed_triangles;
+  j["self_intersecting_pairs"] = r.self_intersecting_pairs;
   json comps = json::array();
   for (const auto& c : t.component_list)
     comps.push_back({{"vertices", c.vertices}, {"edges", c.edges}, {"triangles", c.triangles},
@@ -119,7 +120,8 @@ std::string report_text(const MeshReport& r) {
   os << "  non-manifold edges " << t.nonmanifold_edges << ", non-manifold vertices "
      << t.nonmanifold_vertices << ", degenerate triangles " << t.degenerate_triangles
      << ", duplicate triangles " << t.duplicate_triangles << ", inconsistent edges "
-     << t.inconsistent_edges << "\n";
+     << t.inconsistent_edges << ", self-intersecting triangle pairs " << r.self_intersecting_pairs
+     << "\n";
   if (t.unreferenced_vertices > 0) os << "  unreferenced vertices " << t.unreferenced_vertices << "\n";
   os << "quality\n"
      << "  min angle: min " << fmt("%.2f", q.min_angle.min) << ", p1 " << fmt("%.2f", q.min_angle.p1)
