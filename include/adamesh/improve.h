@@ -50,6 +50,9 @@ struct ImproveOptions {
   double max_error = 0;
   /// The box vertices must stay in (the volume's world box); empty (lo == hi) = no box.
   Box box;
+  /// After the rounds, move the vertices of self-intersecting triangles to the mean of their
+  /// neighbours while that lowers the number of intersecting pairs (docs/QUALITY.md).
+  bool untangle = false;
 };
 
 struct ImproveStats {
@@ -58,6 +61,8 @@ struct ImproveStats {
   int rounds = 0;
   double min_angle_before_deg = 0, min_angle_after_deg = 0;
   double pct_below_20_before = 0, pct_below_20_after = 0;
+  /// With `untangle`: intersecting triangle pairs before and after, and the vertex moves made.
+  std::size_t intersections_before = 0, intersections_after = 0, untangle_moves = 0;
 };
 
 /// Improves `mesh` in place. `fixed` (empty, or one flag per vertex): vertices that must not move

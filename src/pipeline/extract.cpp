@@ -292,6 +292,7 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
       io.voxel = sc.grid.min_spacing();
       io.box = in.field->domain();
       io.target_triangles = cut.mesh.num_triangles();
+      io.untangle = true;
       // An explicit --max-error is a bound the improvement keeps; the default's cap at marching
       // cubes' count already gives up the bound where it binds.
       if (ro.mode == RefineMode::max_error && ro.max_triangles == 0) {

@@ -22,7 +22,10 @@ nlohmann::json improve_json(const ImproveStats& st) {
           {"min_angle_before", st.min_angle_before_deg},
           {"min_angle_after", st.min_angle_after_deg},
           {"pct_below_20_before", st.pct_below_20_before},
-          {"pct_below_20_after", st.pct_below_20_after}};
+          {"pct_below_20_after", st.pct_below_20_after},
+          {"intersections_before", st.intersections_before},
+          {"intersections_after", st.intersections_after},
+          {"untangle_moves", st.untangle_moves}};
 }
 
 nlohmann::json topology_json(const TopologyReport& t) {

@@ -17,6 +17,7 @@
 // Flips and link-condition collapses keep the surface's topology; moves keep the connectivity.
 // Everything is serial and visits elements in a fixed order, so the result is deterministic.
 #include "adamesh/improve.h"
+#include "adamesh/metrics.h"
 
 #include <algorithm>
 #include <iterator>
@@ -37,6 +38,8 @@ constexpr double kDeg = std::numbers::pi / 180;
 constexpr double kErrorSafety = 1.25;
 /// Decimation makes no triangle with a smaller angle than this (degrees) unless one was there.
 constexpr double kDecimateMinAngle = 15;
+/// Untangling moves make no triangle below this (degrees) unless its ring had one.
+constexpr double kUntangleMinAngle = 20;
 
 double angle_at(const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 u = b - a, v = c - a;
@@ -107,6 +110,13 @@ class Improver {
   ImproveStats run() {
     ImproveStats st;
     measure(st.min_angle_before_deg, st.pct_below_20_before);
+    // Unfold first: flips and moves on a folded patch make it worse (a vertex dragged across
+    // its neighbour: 15 crossing pairs left when the rounds go first, none when they follow).
+    std::size_t first = 0;
+    if (o_.untangle) {
+      untangle(st);
+      first = st.intersections_before;
+    }
     for (int r = 0; r < o_.rounds; ++r) {
       const std::size_t f = flip_pass();
       const std::size_t m = move_pass();
@@ -121,6 +131,13 @@ class Improver {
     // the final moves and splits can leave flippable pairs.
     if (o_.target_triangles > 0) st.splits = split_pass(o_.target_triangles);
     st.flips += flip_pass();
+    if (o_.untangle) {
+      // Unfolding leaves umbrella-shaped slivers: shape again, then unfold what that undid.
+      untangle(st);
+      for (int r = 0; r < 2; ++r) st.flips += flip_pass(), st.moves += move_pass();
+      untangle(st);
+      st.intersections_before = first;
+    }
     measure(st.min_angle_after_deg, st.pct_below_20_after);
     return st;
   }
@@ -277,6 +294,105 @@ class Improver {
     if (r.residual > 1e-2 * o_.voxel) return false;
     q = r.point;
     return inside_box(q);
+  }
+
+  /// Intersecting triangle pairs of the current mesh; with `pairs`, which ones (t_ indices).
+  std::size_t intersections(std::vector<std::pair<std::uint32_t, std::uint32_t>>* pairs) const {
+    Mesh m;
+    m.positions.resize(3 * p_.size());
+    for (std::size_t v = 0; v < p_.size(); ++v)
+      for (int k = 0; k < 3; ++k) m.positions[3 * v + k] = static_cast<float>(p_[v][k]);
+    std::vector<std::uint32_t> id;
+    for (std::size_t t = 0; t < t_.size(); ++t) {
+      if (!tri_alive_[t]) continue;
+      id.push_back(static_cast<std::uint32_t>(t));
+      for (auto v : t_[t]) m.triangles.push_back(v);
+    }
+    IntersectionReport r = self_intersections(m, pairs ? m.num_triangles() * m.num_triangles() : 0);
+    if (pairs) {
+      pairs->clear();
+      for (const auto& [a, b] : r.first_pairs) pairs->push_back({id[a], id[b]});
+    }
+    return static_cast<std::size_t>(r.pairs);
+  }
+
+  /// Removes self-intersections where it can (issue 13): the vertices of intersecting triangles
+  /// move half way to the mean of their neighbours (a fold or a crossing made by placements on a
+  /// noisy surface unfolds; projecting back onto the surface folds it again: where two sheets of
+  /// the surface are closer than the triangles are wide, no mesh on the surface avoids crossing),
+  /// all at once, and a round is kept only when the count goes down; when it
+  /// does not, the next round also moves their neighbours (up to two rings). Fixed and boundary
+  /// vertices stay, the box and an explicit error bound hold.
+  void untangle(ImproveStats& st) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs, next;
+    std::size_t cur = intersections(&pairs);
+    st.intersections_before = cur;
+    if (cur == 0) {
+      st.intersections_after = 0;
+      return;
+    }
+    int ring = 0;
+    for (int round = 0; round < 16 && cur > 0; ++round) {
+      build_incidence();
+      std::vector<std::uint8_t> sel(p_.size(), 0);
+      for (const auto& [a, b] : pairs)
+        for (auto t : {a, b})
+          for (auto v : t_[t]) sel[v] = 1;
+      for (int k = 0; k < ring; ++k) {
+        std::vector<std::uint8_t> grown = sel;
+        for (std::uint32_t v = 0; v < p_.size(); ++v)
+          if (sel[v]) {
+            neighbours(v, na_);
+            for (auto w : na_) grown[w] = 1;
+          }
+        sel = std::move(grown);
+      }
+      std::vector<std::pair<std::uint32_t, Vec3>> moves;
+      for (std::uint32_t v = 0; v < p_.size(); ++v) {
+        if (!sel[v] || fixed_[v] || boundary_[v] || inc_off_[v] == inc_off_[v + 1]) continue;
+        neighbours(v, na_);
+        if (na_.empty()) continue;
+        Vec3 q{};
+        for (auto w : na_) q = q + p_[w];
+        q = (1.0 / static_cast<double>(na_.size())) * q;
+        // Half way, else all the way, and not into slivers (CT head at 20k, 943 pairs: full
+        // umbrella alone 55 pairs but 1.6 % of triangles under 20° instead of 0.96 %; half way
+        // with a 20° guard 141 pairs at 0.80 %).
+        auto ring_ok = [&](const Vec3& c) {
+          double before = std::numbers::pi, after = std::numbers::pi;
+          for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
+            const Tri& u = t_[inc_[i]];
+            before = std::min(before, tri_min_angle(u));
+            Vec3 x[3] = {p_[u[0]], p_[u[1]], p_[u[2]]};
+            for (int j = 0; j < 3; ++j)
+              if (u[j] == v) x[j] = c;
+            after = std::min(after, min_angle(x[0], x[1], x[2]));
+          }
+          return after >= std::min(before, kUntangleMinAngle * kDeg);
+        };
+        const Vec3 half = p_[v] + 0.5 * (q - p_[v]);
+        if (ring_ok(half)) q = half;
+        else if (!ring_ok(q)) continue;
+        if (!inside_box(q) || (o_.max_error > 0 && !ring_error_ok(v, q))) continue;
+        moves.push_back({v, q});
+      }
+      std::vector<Vec3> old(moves.size());
+      for (std::size_t i = 0; i < moves.size(); ++i) {
+        old[i] = p_[moves[i].first];
+        p_[moves[i].first] = moves[i].second;
+      }
+      const std::size_t now = intersections(&next);
+      if (now < cur) {
+        cur = now;
+        pairs.swap(next);
+        st.untangle_moves += moves.size();
+        ring = 0;
+      } else {
+        for (std::size_t i = 0; i < moves.size(); ++i) p_[moves[i].first] = old[i];
+        if (++ring > 2) break;
+      }
+    }
+    st.intersections_after = cur;
   }
 
   std::size_t alive_triangles() const {
