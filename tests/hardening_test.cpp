@@ -179,6 +179,24 @@ TEST(Hardening, StatsOnARepeatedTriangleIsFast) {
   EXPECT_EQ(j["duplicate_triangles"], 159999);
 }
 
+TEST(Hardening, SelfIntersectionCountIsBoundedOnPiledTriangles) {
+  // A fan of 100,000 slivers over one spot: every pair overlaps. The count gives up (null)
+  // instead of testing 5·10⁹ pairs.
+  TempDir tmp;
+  const std::string path = tmp.file("fan.obj");
+  std::string obj = "v 0 0 0\n";
+  for (int i = 0; i <= 100000; ++i) obj += "v 1 " + std::to_string(i * 1e-6) + " 0\n";
+  for (int i = 0; i < 100000; ++i)
+    obj += "f 1 " + std::to_string(i + 2) + " " + std::to_string(i + 3) + "\n";
+  write_bytes(path, obj);
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto r = run_cli("stats " + path + " --json");
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_LT(s, 20.0);  // ~0.2 s
+  EXPECT_TRUE(nlohmann::json::parse(r.out)["self_intersecting_pairs"].is_null());
+}
+
 // ----------------------------------------------------------------------------- 5. outputs
 
 /// A pid that existed and has exited (reaped), so no process has it (pids are not reused soon).

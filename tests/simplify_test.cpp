@@ -27,52 +27,6 @@ std::vector<std::pair<std::int64_t, std::int64_t>> component_signature(const Mes
   return sig;
 }
 
-/// Triangle pairs that intersect while sharing no vertex (segment–triangle tests both ways).
-std::size_t self_intersections(const Mesh& m) {
-  auto seg_tri = [](const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
-    const Vec3 n = cross(b - a, c - a);
-    const double dp = dot(p - a, n), dq = dot(q - a, n);
-    if ((dp > 0 && dq > 0) || (dp < 0 && dq < 0) || dp == dq) return false;
-    const Vec3 x = p + (q - p) * (dp / (dp - dq));
-    const double s1 = dot(cross(b - a, x - a), n), s2 = dot(cross(c - b, x - b), n),
-                 s3 = dot(cross(a - c, x - c), n);
-    return (s1 > 0 && s2 > 0 && s3 > 0) || (s1 < 0 && s2 < 0 && s3 < 0);
-  };
-  const std::size_t nf = m.num_triangles();
-  std::vector<Box> boxes(nf);
-  for (std::size_t f = 0; f < nf; ++f) {
-    Box b{m.vertex(m.triangles[3 * f]), m.vertex(m.triangles[3 * f])};
-    for (int k = 1; k < 3; ++k) {
-      b.lo = vmin(b.lo, m.vertex(m.triangles[3 * f + k]));
-      b.hi = vmax(b.hi, m.vertex(m.triangles[3 * f + k]));
-    }
-    boxes[f] = b;
-  }
-  std::size_t hits = 0;
-  for (std::size_t f = 0; f < nf; ++f)
-    for (std::size_t g = f + 1; g < nf; ++g) {
-      const Box &a = boxes[f], &b = boxes[g];
-      if (a.hi.x < b.lo.x || b.hi.x < a.lo.x || a.hi.y < b.lo.y || b.hi.y < a.lo.y ||
-          a.hi.z < b.lo.z || b.hi.z < a.lo.z)
-        continue;
-      const std::uint32_t* u = &m.triangles[3 * f];
-      const std::uint32_t* v = &m.triangles[3 * g];
-      bool share = false;
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) share |= u[i] == v[j];
-      if (share) continue;
-      const Vec3 A[3] = {m.vertex(u[0]), m.vertex(u[1]), m.vertex(u[2])};
-      const Vec3 B[3] = {m.vertex(v[0]), m.vertex(v[1]), m.vertex(v[2])};
-      bool hit = false;
-      for (int i = 0; i < 3 && !hit; ++i) {
-        hit |= seg_tri(A[i], A[(i + 1) % 3], B[0], B[1], B[2]);
-        hit |= seg_tri(B[i], B[(i + 1) % 3], A[0], A[1], A[2]);
-      }
-      hits += hit;
-    }
-  return hits;
-}
-
 /// Median radius ratio q = 2 r_in / r_circ of the triangles.
 double median_q(const Mesh& m) {
   std::vector<double> q;
@@ -140,7 +94,7 @@ BaseMesh check_shape(const std::string& shape, int res, SimplifyOptions opt = {}
   const SurfelComplex sc = build_surfels(*in.volume, 0.0, in.inside_sign);
   BaseMesh bm = check_complex(sc, in.field.get(), opt, shape + " @" + std::to_string(res));
   EXPECT_GE(median_q(bm.mesh), 0.6) << shape;
-  EXPECT_EQ(self_intersections(bm.mesh), 0u) << shape;
+  EXPECT_EQ(self_intersections(bm.mesh).pairs, 0) << shape;
   EXPECT_EQ(bm.stats.fallback_components, 0u) << shape;
   return bm;
 }

@@ -65,6 +65,9 @@ struct ExtractOptions {
   /// above 3/4 of M0's size decimates M0 to 3/4 of the budget first. The hierarchy keeps the improved M0; the output
   /// mesh is improved after the cut (the .amh cut of the same budget is the mesh before).
   bool improve = true;
+  /// Vertex positions of the output mesh: on the surface (the hierarchy's placements), or
+  /// least-squares offsets along the normals (fit_least_squares(), `--fit l2`).
+  enum class Fit { surface, l2 } fit = Fit::surface;
 
   // ---- Report.
   /// Measure every level of the result (distance to the surface, ε_e, ε_n, angles) for
@@ -111,6 +114,7 @@ struct ExtractReport {
   HandleReport handles;             ///< ExtractOptions::max_handle
   ImproveStats base_improve;        ///< shape improvement (and decimation) of M0
   ImproveStats improve;             ///< shape improvement of the output mesh
+  std::optional<FitStats> fit;      ///< ExtractOptions::fit == l2
   /// Seconds per stage: topology_control (with max_handle or min_cavity), surfels, graph,
   /// disk_cover, voronoi, dual, improve_base, refine, improve (read: load + the iso-value check;
   /// write: filled by callers that write files).

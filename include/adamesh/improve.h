@@ -86,4 +86,29 @@ ImproveStats improve_mesh(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
 ImproveStats improve_base_mesh(BaseMesh& base, const ScalarField* field, double iso,
                                const ImproveOptions& options = {}, std::size_t decimate_to = 0);
 
+/// Least-squares vertex positions (`extract --fit l2`, docs/QUALITY.md): vertices move along
+/// their normals to minimise the squared first-order distance (f − iso)/|∇f| of seven points per
+/// triangle to the iso-surface, which makes the error two-sided instead of one-sided.
+struct FitOptions {
+  int passes = 5;         ///< Jacobi passes
+  double damping = 0.7;   ///< fraction of each vertex's own least-squares step taken per pass
+  double max_step = 1;    ///< cap on each step (world units); callers pass a fraction of a voxel
+  Box box;                ///< vertices are clamped into it (empty: none)
+};
+
+struct FitStats {
+  int passes = 0;
+  std::size_t moved = 0;   ///< vertices that moved (and were not moved back)
+  std::size_t undone = 0;  ///< vertex moves undone because they made triangles intersect
+  std::size_t guarded = 0; ///< moves not made: a ring triangle would drop below 20° (unless it was)
+  double rms_before = 0, rms_after = 0;  ///< area-weighted first-order RMS distance
+  std::size_t intersections_before = 0, intersections_after = 0;
+};
+
+/// Fits `mesh` in place. `fixed` (empty or one flag per vertex) and the mesh's boundary vertices
+/// stay; no move is kept that leaves more intersecting triangle pairs than before. Identical
+/// results for any thread count.
+FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
+                           const ScalarField& field, double iso, const FitOptions& options = {});
+
 }  // namespace adamesh

@@ -171,7 +171,9 @@ HausdorffReport hausdorff(const Mesh& a, const Mesh& b, const HausdorffOptions& 
 // ---------------------------------------------------------------------- self-intersections
 
 struct IntersectionReport {
-  std::int64_t pairs = 0;  ///< triangle pairs that meet other than in what they share
+  /// Triangle pairs that meet other than in what they share; −1 when not measured (more than
+  /// 64 pair tests per triangle: piles of triangles over one spot).
+  std::int64_t pairs = 0;
   /// The first pairs (lowest triangle indices), at most keep_pairs of them.
   std::vector<std::pair<std::uint32_t, std::uint32_t>> first_pairs;
 };
@@ -194,7 +196,7 @@ struct MeshReport {
   Box bounds;
   std::optional<FieldErrorReport> field;
   std::optional<HausdorffReport> hausdorff;
-  std::int64_t self_intersecting_pairs = 0;  ///< self_intersections(mesh).pairs
+  std::int64_t self_intersecting_pairs = 0;  ///< self_intersections(mesh).pairs (−1: not measured)
 };
 
 /// Topology, quality, area and volume (field and hausdorff are left empty).

@@ -50,7 +50,8 @@ std::string report_json(const MeshReport& r) {
   j["inconsistent_edges"] = t.inconsistent_edges;
   j["unreferenced_vertices"] = t.unreferenced_vertices;
   j["collapsed_triangles"] = t.collapsed_triangles;
-  j["self_intersecting_pairs"] = r.self_intersecting_pairs;
+  if (r.self_intersecting_pairs >= 0) j["self_intersecting_pairs"] = r.self_intersecting_pairs;
+  else j["self_intersecting_pairs"] = nullptr;
   json comps = json::array();
   for (const auto& c : t.component_list)
     comps.push_back({{"vertices", c.vertices}, {"edges", c.edges}, {"triangles", c.triangles},
@@ -120,7 +121,9 @@ std::string report_text(const MeshReport& r) {
   os << "  non-manifold edges " << t.nonmanifold_edges << ", non-manifold vertices "
      << t.nonmanifold_vertices << ", degenerate triangles " << t.degenerate_triangles
      << ", duplicate triangles " << t.duplicate_triangles << ", inconsistent edges "
-     << t.inconsistent_edges << ", self-intersecting triangle pairs " << r.self_intersecting_pairs
+     << t.inconsistent_edges << ", self-intersecting triangle pairs "
+     << (r.self_intersecting_pairs >= 0 ? std::to_string(r.self_intersecting_pairs)
+                                        : std::string("not measured (triangles piled over one spot)"))
      << "\n";
   if (t.unreferenced_vertices > 0) os << "  unreferenced vertices " << t.unreferenced_vertices << "\n";
   os << "quality\n"

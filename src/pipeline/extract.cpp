@@ -303,6 +303,15 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
       ctx.report("improve", 1);
       timings["improve"] = clock.lap();
     }
+    if (o.fit == ExtractOptions::Fit::l2) {
+      ctx.report("fit", 0);
+      FitOptions fo;
+      fo.max_step = 0.25 * sc.grid.min_spacing();
+      fo.box = in.field->domain();
+      rep.fit = fit_least_squares(cut.mesh, cut.vertex_border, *in.field, iso, fo);
+      ctx.report("fit", 1);
+      timings["fit"] = clock.lap();
+    }
     rep.refined = true;
     rep.refine = std::move(r.stats);
     rep.triangles = cut.mesh.num_triangles();

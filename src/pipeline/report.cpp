@@ -80,6 +80,16 @@ nlohmann::json refine_json(const ExtractReport& r) {
                           {"border", st.border_placements},
                           {"unconverged", st.unconverged_projections}}},
           {"improve", improve_json(r.improve)},
+          {"fit", r.fit ? nlohmann::json{{"method", "l2"},
+                                         {"passes", r.fit->passes},
+                                         {"moved", r.fit->moved},
+                                         {"undone", r.fit->undone},
+                                         {"guarded", r.fit->guarded},
+                                         {"rms_first_order_before", r.fit->rms_before},
+                                         {"rms_first_order_after", r.fit->rms_after},
+                                         {"intersections_before", r.fit->intersections_before},
+                                         {"intersections_after", r.fit->intersections_after}}
+                        : nlohmann::json{{"method", "surface"}}},
           {"triangles", r.triangles},
           {"vertices", r.vertices},
           {"warnings", st.warnings}};
@@ -175,6 +185,9 @@ std::string refine_summary(const ExtractReport& rep) {
   s << "refined (" << rep.chosen << "): " << rep.triangles << " triangles, " << rep.vertices
     << " vertices, depth " << rep.depth << ", " << st.splits << " splits (" << st.forced_splits
     << " forced)";
+  if (rep.fit)
+    s << "; fitted (--fit l2): first-order RMS distance " << rep.fit->rms_before << " -> "
+      << rep.fit->rms_after;
   if (st.at_limit_leaves) {
     s << "; " << st.at_limit_leaves << " triangles above the error bound (stopped at a size limit"
       << (rep.triangle_cap > 0 ? " or the triangle cap)" : ")");

@@ -313,7 +313,7 @@ class Improver {
       pairs->clear();
       for (const auto& [a, b] : r.first_pairs) pairs->push_back({id[a], id[b]});
     }
-    return static_cast<std::size_t>(r.pairs);
+    return static_cast<std::size_t>(std::max<std::int64_t>(r.pairs, 0));  // −1: not measured
   }
 
   /// Removes self-intersections where it can (issue 13): the vertices of intersecting triangles
