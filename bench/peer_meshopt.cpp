@@ -12,6 +12,7 @@
 #include <cfloat>
 #include <memory>
 
+#include "adamesh/context.h"
 #include "adamesh/surfels.h"
 #include "peer_common.h"
 

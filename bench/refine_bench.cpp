@@ -11,6 +11,7 @@
 #include <map>
 #include <memory>
 
+#include "adamesh/context.h"
 #include "adamesh/graph.h"
 #include "adamesh/input.h"
 #include "adamesh/refine.h"
@@ -73,10 +74,11 @@ void BM_RefineUniform(benchmark::State& state) {
   RefineOptions opt;
   opt.mode = RefineMode::uniform;
   opt.levels = static_cast<int>(state.range(0));
-  opt.threads = static_cast<int>(state.range(1));
+  ExecutionContext ctx;
+  ctx.threads = static_cast<int>(state.range(1));
   std::size_t splits = 0;
   for (auto _ : state) {
-    const RefineResult r = refine(s.sc, s.base, *s.in.field, opt, &s.g);
+    const RefineResult r = refine(s.sc, s.base, *s.in.field, opt, &s.g, ctx);
     splits = r.hierarchy.splits.size();
     benchmark::DoNotOptimize(r.hierarchy.splits.data());
   }

@@ -7,6 +7,7 @@
 #include <map>
 #include <memory>
 
+#include "adamesh/context.h"
 #include "adamesh/surfels.h"
 
 using namespace adamesh;

@@ -19,9 +19,10 @@ pkgs=(
   nlohmann-json3-dev    # JSON reports (only in .cpp files that write or read JSON)
   libgtest-dev libgmock-dev libbenchmark-dev
   python3
-  # Python package (python/, docs/PYTHON.md): module, tests, example, `pip install .`
+  # Python package (python/, docs/PYTHON.md): module, tests, example; `pip install .` offline
+  # (in-tree build backend: pip and venv only, nothing downloaded)
   python3-dev python3-pybind11 python3-numpy python3-pytest python3-matplotlib
-  python3-setuptools python3-wheel python3-pip python3-venv
+  python3-pip python3-venv
 )
 case "${1:-}" in
   --bench) pkgs+=(gnuplot-nox) ;;

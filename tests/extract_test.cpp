@@ -125,8 +125,8 @@ TEST(Extract, ReportsProgressInStageOrder) {
     if (stages.empty() || stages.back() != s) stages.push_back(s);
   };
   extract("shape:genus2", o);
-  const std::vector<std::string> want = {"read",       "surfels", "graph",  "disk cover",
-                                         "dual",       "improve M0", "refine", "improve"};
+  const std::vector<std::string> want = {"read",   "surfels",    "graph",  "disk cover", "voronoi",
+                                         "dual",   "improve M0", "refine", "improve"};
   EXPECT_EQ(stages, want);
 }
 

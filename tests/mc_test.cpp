@@ -14,6 +14,7 @@
 #include <random>
 #include <sstream>
 
+#include "adamesh/context.h"
 #include "adamesh/input.h"
 #include "adamesh/io.h"
 #include "adamesh/metrics.h"

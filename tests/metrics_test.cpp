@@ -7,6 +7,7 @@
 #include <numbers>
 #include <random>
 
+#include "adamesh/context.h"
 #include "adamesh/error.h"
 #include "adamesh/metrics.h"
 #include "mesh_checks.h"
@@ -476,7 +477,7 @@ TEST(Hausdorff, BvhClosestMatchesBruteForce) {
 TEST(Determinism, SameNumbersWithOneAndTwoThreads) {
   const Mesh m = merged(icosphere(6, 1.0), torus(200, 100, 3, 0.5));  // 122k triangles
   const SphereField f(1.0);
-  MetricsOptions one{1}, two{2};
+  ExecutionContext one{1}, two{2};
   const TopologyReport t1 = topology(m, one), t2 = topology(m, two);
   EXPECT_EQ(t1.edges, t2.edges);
   EXPECT_EQ(t1.boundary_loops, t2.boundary_loops);
@@ -490,10 +491,8 @@ TEST(Determinism, SameNumbersWithOneAndTwoThreads) {
   FieldErrorOptions fo;
   fo.inside_sign = -1;
   fo.samples = 50000;
-  fo.threads = 1;
-  const FieldErrorReport f1 = field_error(m, f, 0.0, fo);
-  fo.threads = 2;
-  const FieldErrorReport f2 = field_error(m, f, 0.0, fo);
+  const FieldErrorReport f1 = field_error(m, f, 0.0, fo, one);
+  const FieldErrorReport f2 = field_error(m, f, 0.0, fo, two);
   EXPECT_EQ(f1.distance.mean, f2.distance.mean);
   EXPECT_EQ(f1.distance.rms, f2.distance.rms);
   EXPECT_EQ(f1.distance.p99, f2.distance.p99);
@@ -501,10 +500,8 @@ TEST(Determinism, SameNumbersWithOneAndTwoThreads) {
   EXPECT_EQ(f1.eps_n, f2.eps_n);
   HausdorffOptions ho;
   ho.samples = 50000;
-  ho.threads = 1;
-  const HausdorffReport h1 = hausdorff(m, icosphere(5, 1.1), ho);
-  ho.threads = 2;
-  const HausdorffReport h2 = hausdorff(m, icosphere(5, 1.1), ho);
+  const HausdorffReport h1 = hausdorff(m, icosphere(5, 1.1), ho, one);
+  const HausdorffReport h2 = hausdorff(m, icosphere(5, 1.1), ho, two);
   EXPECT_EQ(h1.a_to_b.mean, h2.a_to_b.mean);
   EXPECT_EQ(h1.b_to_a.rms, h2.b_to_a.rms);
   EXPECT_EQ(h1.symmetric, h2.symmetric);

@@ -4,6 +4,7 @@
 
 #include <cstdio>
 
+#include "adamesh/context.h"
 #include "adamesh/error.h"
 #include "adamesh/metrics.h"
 #include "adamesh/refine.h"
@@ -206,8 +207,9 @@ TEST(RefineAdaptive, DeterministicAcrossRunsAndThreads) {
       o.levels = mode == RefineMode::uniform ? 4 : 20;
       o.max_triangles = 6000;
       o.delta = 0.05 * f.h;
-      o.threads = threads;
-      hs.push_back(refine(f.sc, f.base, *f.in.field, o).hierarchy);
+      ExecutionContext ctx;
+      ctx.threads = threads;
+      hs.push_back(refine(f.sc, f.base, *f.in.field, o, nullptr, ctx).hierarchy);
     }
     for (std::size_t i = 1; i < hs.size(); ++i) {
       EXPECT_EQ(hs[i].base_triangles, hs[0].base_triangles);

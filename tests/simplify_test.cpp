@@ -5,6 +5,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "adamesh/context.h"
 #include "adamesh/error.h"
 #include "adamesh/graph.h"
 #include "adamesh/input.h"
@@ -147,16 +148,13 @@ TEST(Simplify, DeterministicAcrossRunsAndThreads) {
   InputOptions io;
   io.resolution = 64;
   const Input in = load_input("shape:genus2", io);
-  SurfelOptions s1, s2;
-  s1.threads = 1;
-  s2.threads = 2;
-  const SurfelComplex a = build_surfels(*in.volume, 0.0, in.inside_sign, s1);
-  const SurfelComplex b = build_surfels(*in.volume, 0.0, in.inside_sign, s2);
-  SimplifyOptions o1, o2;
-  o1.threads = 1;
-  o2.threads = 2;
-  const BaseMesh ma = simplify(a, in.field.get(), o1), mb = simplify(b, in.field.get(), o2),
-                 mc = simplify(b, in.field.get(), o2);
+  ExecutionContext one, two;
+  one.threads = 1;
+  two.threads = 2;
+  const SurfelComplex a = build_surfels(*in.volume, 0.0, in.inside_sign, one);
+  const SurfelComplex b = build_surfels(*in.volume, 0.0, in.inside_sign, two);
+  const BaseMesh ma = simplify(a, in.field.get(), {}, one), mb = simplify(b, in.field.get(), {}, two),
+                 mc = simplify(b, in.field.get(), {}, two);
   EXPECT_EQ(ma.mesh.positions, mb.mesh.positions);
   EXPECT_EQ(ma.mesh.triangles, mb.mesh.triangles);
   EXPECT_EQ(mb.mesh.positions, mc.mesh.positions);

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <random>
 
+#include "adamesh/context.h"
 #include "adamesh/error.h"
 #include "adamesh/surfels.h"
 #include "surfel_test_util.h"

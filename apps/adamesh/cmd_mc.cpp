@@ -8,6 +8,7 @@
 #include <iostream>
 #include <string>
 
+#include "adamesh/context.h"
 #include "adamesh/error.h"
 #include "adamesh/input.h"
 #include "adamesh/io.h"
@@ -69,13 +70,14 @@ int cmd_mc(const Argv& argv) {
                             " has no default iso-value; give --iso V (adamesh info suggests one)");
   check_iso_in_range(in, iso);  // as extract: an iso-value outside the data is an error
 
-  const int nthreads = static_cast<int>(threads);
-  tbb::task_arena arena(nthreads > 0 ? nthreads : tbb::task_arena::automatic);
+  ExecutionContext ctx;
+  ctx.threads = static_cast<int>(threads);
+  tbb::task_arena arena(ctx.threads > 0 ? ctx.threads : tbb::task_arena::automatic);
   const auto t_mesh = std::chrono::steady_clock::now();
   Mesh mesh;
   std::size_t surfels = 0;
   arena.execute([&] {
-    const SurfelComplex cx = build_surfels(*in.volume, iso, in.inside_sign, {nthreads});
+    const SurfelComplex cx = build_surfels(*in.volume, iso, in.inside_sign, ctx);
     surfels = cx.num_surfels();
     mesh = marching_cubes(cx);
   });

@@ -7,6 +7,7 @@
 #include <iostream>
 #include <string>
 
+#include "adamesh/context.h"
 #include "adamesh/error.h"
 #include "adamesh/input.h"
 #include "adamesh/io.h"
@@ -48,8 +49,9 @@ int cmd_stats(const Argv& argv) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::string& path = args.positionals()[0];
   const Mesh mesh = read_mesh(path);
-  const MetricsOptions mo{static_cast<int>(threads)};
-  MeshReport report = mesh_report(mesh, mo);
+  ExecutionContext ctx;
+  ctx.threads = static_cast<int>(threads);
+  MeshReport report = mesh_report(mesh, ctx);
 
   if (const auto spec = args.get("--field")) {
     const Input in = load_input(*spec, input_options_from(args));
@@ -64,15 +66,13 @@ int cmd_stats(const Argv& argv) {
     fo.max_step = in.volume->grid.min_spacing();  // one voxel per Newton step
     fo.tolerance = 1e-5 * fo.max_step;
     fo.samples = samples;
-    fo.threads = mo.threads;
-    report.field = field_error(mesh, *in.field, iso, fo);
+    report.field = field_error(mesh, *in.field, iso, fo, ctx);
   }
   if (const auto ref_path = args.get("--reference")) {
     const Mesh ref = read_mesh(*ref_path);
     HausdorffOptions ho;
     ho.samples = samples;
-    ho.threads = mo.threads;
-    report.hausdorff = hausdorff(mesh, ref, ho);
+    report.hausdorff = hausdorff(mesh, ref, ho, ctx);
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 

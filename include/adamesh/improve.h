@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "adamesh/context_fwd.h"
 #include "adamesh/field.h"
 #include "adamesh/mesh.h"
 #include "adamesh/simplify.h"
@@ -72,9 +73,11 @@ struct ImproveStats {
 /// vertex's tangent plane. Deterministic (serial, fixed visiting order). Vertex attributes and
 /// normals are dropped when collapses renumber the vertices.
 /// `vertex_map` (optional): per input vertex, its index in the output (UINT32_MAX if removed).
+/// `context`: cancellation (and progress, stage "improve") checked inside the passes.
 ImproveStats improve_mesh(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
                           const ScalarField* field, double iso, const ImproveOptions& options = {},
-                          std::vector<std::uint32_t>* vertex_map = nullptr);
+                          std::vector<std::uint32_t>* vertex_map = nullptr,
+                          const ExecutionContext& context = default_context());
 
 /// The same on a base mesh M0 before refinement (ALGORITHM.md leaves level 0 free until the blocks
 /// are built): border vertices stay, the per-vertex anchor/border/component arrays follow the
@@ -82,9 +85,10 @@ ImproveStats improve_mesh(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
 /// starting points for the refinement's graph searches.
 /// `decimate_to` > 0: first collapse the shortest edges (link condition, no new triangle below
 /// 15°, flips between passes) until M0 has at most that many triangles or no edge can go — the smallest base a triangle
-/// budget below M0's size needs.
+/// budget below M0's size needs. Progress stage: "improve M0".
 ImproveStats improve_base_mesh(BaseMesh& base, const ScalarField* field, double iso,
-                               const ImproveOptions& options = {}, std::size_t decimate_to = 0);
+                               const ImproveOptions& options = {}, std::size_t decimate_to = 0,
+                               const ExecutionContext& context = default_context());
 
 /// Least-squares vertex positions (`extract --fit l2`, docs/QUALITY.md): vertices move along
 /// their normals to minimise the squared first-order distance (f − iso)/|∇f| of seven points per
@@ -109,6 +113,7 @@ struct FitStats {
 /// stay; no move is kept that leaves more intersecting triangle pairs than before. Identical
 /// results for any thread count.
 FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
-                           const ScalarField& field, double iso, const FitOptions& options = {});
+                           const ScalarField& field, double iso, const FitOptions& options = {},
+                           const ExecutionContext& context = default_context());
 
 }  // namespace adamesh

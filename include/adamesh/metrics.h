@@ -2,8 +2,9 @@
 // with the edge and normal deviations ε_e / ε_n (ALGORITHM.md section 4), and Hausdorff distances
 // to a reference mesh. Free functions on plain data; every number is defined in docs/METRICS.md.
 //
-// All functions run in parallel (oneTBB) and return identical results for any thread count:
-// floating-point sums are formed per fixed-size chunk and the chunk sums added in chunk order.
+// All functions run in parallel (oneTBB) with the context's worker threads (context.h; default:
+// all hardware threads) and return identical results for any thread count: floating-point sums
+// are formed per fixed-size chunk and the chunk sums added in chunk order.
 // Lengths are in the mesh's world units, angles in degrees.
 #pragma once
 
@@ -14,15 +15,12 @@
 #include <utility>
 #include <vector>
 
+#include "adamesh/context_fwd.h"
 #include "adamesh/field.h"
 #include "adamesh/mesh.h"
 #include "adamesh/vec.h"
 
 namespace adamesh {
-
-struct MetricsOptions {
-  int threads = 0;  ///< worker threads; 0 = all hardware threads. Results do not depend on it.
-};
 
 // ------------------------------------------------------------------------------ topology
 
@@ -67,7 +65,7 @@ struct TopologyReport {
   std::vector<ComponentTopology> component_list;
 };
 
-TopologyReport topology(const Mesh& mesh, const MetricsOptions& options = {});
+TopologyReport topology(const Mesh& mesh, const ExecutionContext& context = default_context());
 
 // ------------------------------------------------------------------------ triangle quality
 
@@ -89,18 +87,18 @@ struct QualityReport {
 };
 
 /// Zero-area triangles count as min angle 0°, max angle 180°, q = 0. Empty mesh: all zero.
-QualityReport quality(const Mesh& mesh, const MetricsOptions& options = {});
+QualityReport quality(const Mesh& mesh, const ExecutionContext& context = default_context());
 
 // ---------------------------------------------------------------------- area and volume
 
-double surface_area(const Mesh& mesh, const MetricsOptions& options = {});
+double surface_area(const Mesh& mesh, const ExecutionContext& context = default_context());
 /// Σ_T (a·(b×c))/6 over all triangles (divergence theorem), relative to the bounding-box
 /// centre. The enclosed volume when the mesh is closed and consistently oriented (positive for
 /// outward orientation); meaningless otherwise.
-double signed_volume(const Mesh& mesh, const MetricsOptions& options = {});
+double signed_volume(const Mesh& mesh, const ExecutionContext& context = default_context());
 /// signed_volume() when `topo` says the mesh is closed and oriented, else empty.
 std::optional<double> enclosed_volume(const Mesh& mesh, const TopologyReport& topo,
-                                      const MetricsOptions& options = {});
+                                      const ExecutionContext& context = default_context());
 
 // ---------------------------------------------------------------------- distance statistics
 
@@ -128,7 +126,6 @@ struct FieldErrorOptions {
   /// surface; 0 = the mesh's mean edge length. `adamesh stats` passes the voxel size.
   double max_step = 0;
   int max_steps = 50;  ///< Newton steps per projection
-  int threads = 0;
 };
 
 struct FieldErrorReport {
@@ -147,13 +144,13 @@ struct FieldErrorReport {
 /// Distances from the mesh to the iso-surface f = iso: each point's distance is the length of
 /// its converged projection (project_to_iso). ε_e and ε_n as in ALGORITHM.md section 4.
 FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double iso,
-                             const FieldErrorOptions& options = {});
+                             const FieldErrorOptions& options = {},
+                             const ExecutionContext& context = default_context());
 
 // ---------------------------------------------------------------------- against a mesh
 
 struct HausdorffOptions {
   std::int64_t samples = 0;  ///< per side; 0 = default_sample_count() of the sampled mesh
-  int threads = 0;
 };
 
 struct HausdorffReport {
@@ -166,7 +163,8 @@ struct HausdorffReport {
 
 /// One-sided distances both ways (exact point-to-triangle distances through a BVH) and the
 /// symmetric Hausdorff distance. A mesh without triangles is at infinite distance.
-HausdorffReport hausdorff(const Mesh& a, const Mesh& b, const HausdorffOptions& options = {});
+HausdorffReport hausdorff(const Mesh& a, const Mesh& b, const HausdorffOptions& options = {},
+                          const ExecutionContext& context = default_context());
 
 // ---------------------------------------------------------------------- self-intersections
 
@@ -183,7 +181,7 @@ struct IntersectionReport {
 /// collapsed triangles are not counted (they are topology findings). Double-precision orientation
 /// tests with a relative tolerance: a contact within it counts (docs/METRICS.md).
 IntersectionReport self_intersections(const Mesh& mesh, std::size_t keep_pairs = 0,
-                                      const MetricsOptions& options = {});
+                                      const ExecutionContext& context = default_context());
 
 // ---------------------------------------------------------------------- reports
 
@@ -200,7 +198,7 @@ struct MeshReport {
 };
 
 /// Topology, quality, area and volume (field and hausdorff are left empty).
-MeshReport mesh_report(const Mesh& mesh, const MetricsOptions& options = {});
+MeshReport mesh_report(const Mesh& mesh, const ExecutionContext& context = default_context());
 
 /// JSON object with the keys of docs/METRICS.md (vertices, edges, ..., distance, eps_e, eps_n,
 /// hausdorff, area, volume); absent measurements are null.

@@ -14,10 +14,10 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <functional>
 #include <string>
 #include <vector>
 
+#include "adamesh/context_fwd.h"
 #include "adamesh/field.h"
 #include "adamesh/graph.h"
 #include "adamesh/mesh.h"
@@ -59,7 +59,6 @@ struct RefineOptions {
   /// Edges shorter than geodesic_min_edge·h get the Euclidean midpoint instead of the graph
   /// geodesic midpoint (graph paths are quantised at that scale; ALGORITHM.md 5.2).
   double geodesic_min_edge = 4.0;
-  int threads = 0;  ///< 0 = all hardware threads; results are identical for any value
   /// Testing: build blocks with the fallback (three quads per base triangle) even when a perfect
   /// matching exists.
   bool force_quad_blocks = false;
@@ -67,8 +66,6 @@ struct RefineOptions {
   /// small balls around the unmatched triangles first (the global search costs O(n·m) on large
   /// noisy bases); smaller ones use the global search only. Testing sets 0 to force the local path.
   std::size_t local_matching_from = 16384;
-  /// Optional progress report: stage name and fraction done.
-  std::function<void(const char* stage, double fraction)> progress;
 };
 
 struct RefineStats {
@@ -148,9 +145,12 @@ struct RefineResult {
 
 /// Pairs M0 into blocks, then refines as `options` says. `graph` is built from `complex` when
 /// null. `field` must be the field the complex was built from (same iso-value, `complex.iso`).
+/// `context`: worker threads (results are identical for any count), progress ("refine") and
+/// cancellation, checked during the refinement loops.
 /// Throws Error(invalid_input) for an empty base mesh or invalid options.
 RefineResult refine(const SurfelComplex& complex, const BaseMesh& base, const ScalarField& field,
-                    const RefineOptions& options = {}, const ConnectivityGraph* graph = nullptr);
+                    const RefineOptions& options = {}, const ConnectivityGraph* graph = nullptr,
+                    const ExecutionContext& context = default_context());
 
 /// All splits: the finest mesh of the hierarchy.
 CutMesh extract_all(const Hierarchy& h);

@@ -8,10 +8,10 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <functional>
 #include <string>
 #include <vector>
 
+#include "adamesh/context_fwd.h"
 #include "adamesh/field.h"
 #include "adamesh/graph.h"
 #include "adamesh/mesh.h"
@@ -30,7 +30,6 @@ struct SimplifyOptions {
   double target_cells = 1000;           ///< sets the default r_max: area / r_max² ≈ target_cells
   /// Components of G with fewer surfels are dropped (noise). 0 = keep all (default).
   std::size_t min_component_surfels = 0;
-  int threads = 0;                      ///< 0 = all hardware threads; output is identical for any
   bool validate = false;                ///< run the debug validator (slow) and fill the report
   /// Move base vertices onto the iso-surface with safeguarded Newton steps (needs a field).
   bool project_vertices = true;
@@ -38,8 +37,6 @@ struct SimplifyOptions {
   /// Surface area of the kept components (sets the default r_max), when the caller computed it
   /// with active_surface_area(); < 0: build_covering computes it from the node positions.
   double surface_area = -1;
-  /// Optional progress report: stage name ("disk cover", "voronoi", "dual") and fraction done.
-  std::function<void(const char* stage, double fraction)> progress;
 };
 
 /// What the debug validator found (ALGORITHM.md section 4, "Covering").
@@ -106,14 +103,18 @@ double active_surface_area(const SurfelComplex& complex, const ConnectivityGraph
 
 /// Disk covering + Voronoi covering with local repair of violated cells. Reads no node keys or
 /// positions when options.surface_area is given (the complex's node geometry may be released).
+/// Sequential. Reports progress ("disk cover" then "voronoi") and checks cancellation through
+/// `context` during both.
 Covering build_covering(const SurfelComplex& complex, const ConnectivityGraph& graph,
-                        const SimplifyOptions& options, SimplifyStats& stats);
+                        const SimplifyOptions& options, SimplifyStats& stats,
+                        const ExecutionContext& context = default_context());
 
 /// Dual triangulation of the covering (fallback components meshed from their surfels).
 /// `field` (optional) is used to project vertices onto the iso-surface.
 BaseMesh build_base_mesh(const SurfelComplex& complex, const ConnectivityGraph& graph,
                          Covering covering, const ScalarField* field,
-                         const SimplifyOptions& options, SimplifyStats stats);
+                         const SimplifyOptions& options, SimplifyStats stats,
+                         const ExecutionContext& context = default_context());
 
 /// Debug validator: coverage, independence, grading ≤ 2, disks are topological disks, no violated
 /// Voronoi cell (components meshed by the fallback are skipped). One Dijkstra per disk: slow.
@@ -122,6 +123,7 @@ CoveringValidation validate_covering(const SurfelComplex& complex, const Connect
 
 /// Convenience: graph → covering → base mesh.
 BaseMesh simplify(const SurfelComplex& complex, const ScalarField* field,
-                  const SimplifyOptions& options = {});
+                  const SimplifyOptions& options = {},
+                  const ExecutionContext& context = default_context());
 
 }  // namespace adamesh

@@ -11,15 +11,12 @@
 #include <span>
 #include <vector>
 
+#include "adamesh/context_fwd.h"
 #include "adamesh/mesh.h"
 #include "adamesh/vec.h"
 #include "adamesh/volume.h"
 
 namespace adamesh {
-
-struct SurfelOptions {
-  int threads = 0;  ///< 0 = all hardware threads; results are identical for any value
-};
 
 /// The opposite surfels of one polygon's edges (SurfelComplex::opposites_of), by value: they are
 /// computed from the node fans, not stored. A voxel has 12 edges, so a polygon at most 12 nodes.
@@ -116,8 +113,8 @@ struct SurfelComplex {
   }
 };
 
-/// Builds the surfel complex of `volume` at `iso`. Parallel over z-slabs without locks; the
-/// result is byte-identical for any thread count. Ambiguous faces: asymptotic decider on the
+/// Builds the surfel complex of `volume` at `iso`. Parallel over z-slabs without locks, with
+/// `context.threads` workers; the result is byte-identical for any thread count. Ambiguous faces: asymptotic decider on the
 /// face's own four values (saddle value 0 counts as positive), so both voxels of a face agree.
 /// Orientation is combinatorial (docs/TOPOLOGY.md): polygons are counter-clockwise seen from the
 /// negative side, i.e. their normal follows −inside_sign·∇f, also for grids whose direction
@@ -126,7 +123,7 @@ struct SurfelComplex {
 /// \throw Error(invalid_input) when iso is not finite or inside_sign is not ±1;
 ///        Error(unsupported) when ids would overflow 32 bits.
 SurfelComplex build_surfels(const Volume& volume, double iso, double inside_sign = 1,
-                            const SurfelOptions& options = {});
+                            const ExecutionContext& context = default_context());
 
 /// Memory: releases node_key and node_pos (20 bytes per node). Nothing in the covering
 /// (build_covering) reads them; restore_node_geometry() recomputes them before anything else does.
@@ -136,7 +133,7 @@ void release_node_geometry(SurfelComplex& complex);
 /// was built from (same grid, iso-value and sign). No-op when they are present.
 /// \throw Error(internal) when the volume's nodes do not match the complex.
 void restore_node_geometry(const Volume& volume, SurfelComplex& complex,
-                           const SurfelOptions& options = {});
+                           const ExecutionContext& context = default_context());
 
 /// Reference marching cubes: triangulates every surfel polygon over the shared node vertices
 /// (vertex i = node i), maximising each polygon's minimum angle. Watertight where the surface is

@@ -344,9 +344,7 @@ PyMesh run_mc(py::object source, std::optional<double> iso, const InputOptions& 
     if (iso) value = *iso;
     else if (in->default_iso) value = *in->default_iso;
     else fail(Status::usage, in->spec + ": an iso-value is required for volume files");
-    SurfelOptions so;
-    so.threads = threads;
-    return PyMesh{marching_cubes(build_surfels(*in->volume, value, in->inside_sign, so))};
+    return PyMesh{marching_cubes(build_surfels(*in->volume, value, in->inside_sign, ctx))};
   });
 }
 
@@ -358,9 +356,7 @@ std::string run_stats(const PyMesh& mesh, py::object field, std::optional<double
   const bool with_field = !field.is_none();
   const Source src = with_field ? resolve(field) : Source{};
   return run_released(ctx, py::none(), [&] {
-    MetricsOptions mo;
-    mo.threads = threads;
-    MeshReport report = mesh_report(mesh.mesh, mo);
+    MeshReport report = mesh_report(mesh.mesh, ctx);
     if (with_field) {
       Input loaded;
       const Input* in = &input_of(src, input, loaded);
@@ -373,14 +369,12 @@ std::string run_stats(const PyMesh& mesh, py::object field, std::optional<double
       fo.max_step = in->volume->grid.min_spacing();
       fo.tolerance = 1e-5 * fo.max_step;
       fo.samples = samples;
-      fo.threads = threads;
-      report.field = field_error(mesh.mesh, *in->field, value, fo);
+      report.field = field_error(mesh.mesh, *in->field, value, fo, ctx);
     }
     if (reference) {
       HausdorffOptions ho;
       ho.samples = samples;
-      ho.threads = threads;
-      report.hausdorff = hausdorff(mesh.mesh, reference->mesh, ho);
+      report.hausdorff = hausdorff(mesh.mesh, reference->mesh, ho, ctx);
     }
     return report_json(report);
   });

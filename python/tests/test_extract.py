@@ -71,7 +71,7 @@ def test_progress_callback_sees_the_stages_in_order():
             seen.append(stage)
 
     adamesh.extract("shape:genus2", triangles=2000, progress=progress)
-    assert seen[:5] == ["read", "surfels", "graph", "disk cover", "dual"]
+    assert seen[:6] == ["read", "surfels", "graph", "disk cover", "voronoi", "dual"]
     assert "refine" in seen
 
 
@@ -86,6 +86,30 @@ def test_an_exception_in_the_callback_stops_the_call():
     with pytest.raises(KeyError, match="stop here"):
         adamesh.extract("shape:torus", progress=progress)
     assert "refine" not in calls
+
+
+def test_ctrl_c_stops_a_running_extract_inside_a_stage():
+    # SIGINT to this process 0.2 s into the refinement, with no progress callback: the library's
+    # periodic reports inside the stage let the binding see the signal (PyErr_CheckSignals).
+    import os
+    import signal
+    stage = {}
+
+    def progress(name, fraction):
+        if name == "refine" and "t" not in stage:
+            stage["t"] = time.perf_counter()
+            threading.Timer(0.2, lambda: (stage.setdefault("sent", time.perf_counter()),
+                                          os.kill(os.getpid(), signal.SIGINT))).start()
+
+    finished = False
+    with pytest.raises(KeyboardInterrupt):
+        adamesh.extract("shape:gyroid", res=128, triangles=150000, progress=progress)
+        finished = True  # the signal came too late: it interrupts the sleep instead
+        time.sleep(5)
+    returned = time.perf_counter()
+    assert not finished, "extract() finished before the signal"
+    assert "sent" in stage, "refine never started"
+    assert returned - stage["sent"] < 1.0, returned - stage["sent"]
 
 
 def test_progress_true_works_without_tqdm(capsys):

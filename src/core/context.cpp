@@ -4,6 +4,11 @@
 
 namespace adamesh {
 
+const ExecutionContext& default_context() noexcept {
+  static const ExecutionContext context;
+  return context;
+}
+
 void ExecutionContext::check_cancelled() const {
   if (cancelled()) fail(Status::cancelled, "cancelled");
 }

@@ -55,9 +55,9 @@ class DifferencedField : public ScalarField {
 }  // namespace
 
 FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double iso,
-                             const FieldErrorOptions& opt) {
+                             const FieldErrorOptions& opt, const ExecutionContext& context) {
   detail::check_mesh(mesh);
-  return detail::with_threads(opt.threads, [&] {
+  return detail::with_threads(context, [&] {
     FieldErrorReport r;
     const std::size_t nt = mesh.num_triangles();
     const std::uint32_t* tri = mesh.triangles.data();

@@ -51,10 +51,11 @@ DistanceStats one_sided(const Mesh& from, const detail::TriangleBvh& to, std::in
 
 }  // namespace
 
-HausdorffReport hausdorff(const Mesh& a, const Mesh& b, const HausdorffOptions& options) {
+HausdorffReport hausdorff(const Mesh& a, const Mesh& b, const HausdorffOptions& options,
+                          const ExecutionContext& context) {
   detail::check_mesh(a, "mesh");
   detail::check_mesh(b, "reference mesh");
-  return detail::with_threads(options.threads, [&] {
+  return detail::with_threads(context, [&] {
     HausdorffReport r;
     {
       const detail::TriangleBvh bvh_b(b);

@@ -136,7 +136,7 @@ bool edge_pair_intersects(const P* s, const P* t) {
 }  // namespace
 
 IntersectionReport self_intersections(const Mesh& mesh, std::size_t keep_pairs,
-                                      const MetricsOptions& options) {
+                                      const ExecutionContext& context) {
   IntersectionReport rep;
   const std::size_t nt = mesh.num_triangles();
   if (nt < 2) return rep;
@@ -222,7 +222,7 @@ IntersectionReport self_intersections(const Mesh& mesh, std::size_t keep_pairs,
     return rep;
   }
   std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> found(cells);
-  detail::with_threads(options.threads, [&] {
+  detail::with_threads(context, [&] {
     detail::for_chunks(cells, [&](std::size_t c0, std::size_t c1) {
       for (std::size_t c = c0; c < c1; ++c) {
         const std::uint64_t id = entries[starts[c]].first;

@@ -13,11 +13,14 @@
 #include <utility>
 #include <vector>
 
+#include "adamesh/context.h"
+
 namespace adamesh::detail {
 
-/// Runs f() with at most `threads` worker threads (0 = the default arena).
+/// Runs f() with at most `context.threads` worker threads (0 = the default arena).
 template <class F>
-decltype(auto) with_threads(int threads, F&& f) {
+decltype(auto) with_threads(const ExecutionContext& context, F&& f) {
+  const int threads = context.threads;
   if (threads <= 0) return f();
   tbb::task_arena arena(threads);
   return arena.execute(std::forward<F>(f));

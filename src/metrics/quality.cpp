@@ -52,9 +52,9 @@ struct QualityParts {
 
 }  // namespace
 
-QualityReport quality(const Mesh& mesh, const MetricsOptions& options) {
+QualityReport quality(const Mesh& mesh, const ExecutionContext& context) {
   detail::check_mesh(mesh);
-  return detail::with_threads(options.threads, [&] {
+  return detail::with_threads(context, [&] {
     const std::size_t nt = mesh.num_triangles();
     const std::uint32_t* tri = mesh.triangles.data();
     QualityReport r;
@@ -98,10 +98,10 @@ QualityReport quality(const Mesh& mesh, const MetricsOptions& options) {
   });
 }
 
-double surface_area(const Mesh& mesh, const MetricsOptions& options) {
+double surface_area(const Mesh& mesh, const ExecutionContext& context) {
   detail::check_mesh(mesh);
   const std::uint32_t* tri = mesh.triangles.data();
-  return detail::with_threads(options.threads, [&] {
+  return detail::with_threads(context, [&] {
     return detail::chunked_sum(mesh.num_triangles(), [&](std::size_t t) {
       const Vec3 a = mesh.vertex(tri[3 * t]);
       return 0.5 * norm(cross(mesh.vertex(tri[3 * t + 1]) - a, mesh.vertex(tri[3 * t + 2]) - a));
@@ -109,12 +109,12 @@ double surface_area(const Mesh& mesh, const MetricsOptions& options) {
   });
 }
 
-double signed_volume(const Mesh& mesh, const MetricsOptions& options) {
+double signed_volume(const Mesh& mesh, const ExecutionContext& context) {
   detail::check_mesh(mesh);
   const Box box = mesh.bounds();
   const Vec3 o = 0.5 * (box.lo + box.hi);  // keeps the products small: less cancellation
   const std::uint32_t* tri = mesh.triangles.data();
-  return detail::with_threads(options.threads, [&] {
+  return detail::with_threads(context, [&] {
     return detail::chunked_sum(mesh.num_triangles(), [&](std::size_t t) {
       const Vec3 a = mesh.vertex(tri[3 * t]) - o, b = mesh.vertex(tri[3 * t + 1]) - o,
                  c = mesh.vertex(tri[3 * t + 2]) - o;
@@ -124,9 +124,9 @@ double signed_volume(const Mesh& mesh, const MetricsOptions& options) {
 }
 
 std::optional<double> enclosed_volume(const Mesh& mesh, const TopologyReport& topo,
-                                      const MetricsOptions& options) {
+                                      const ExecutionContext& context) {
   if (!topo.closed || !topo.oriented) return std::nullopt;
-  return signed_volume(mesh, options);
+  return signed_volume(mesh, context);
 }
 
 std::int64_t default_sample_count(const Mesh& mesh) {
@@ -134,14 +134,14 @@ std::int64_t default_sample_count(const Mesh& mesh) {
                                   2'000'000);
 }
 
-MeshReport mesh_report(const Mesh& mesh, const MetricsOptions& options) {
+MeshReport mesh_report(const Mesh& mesh, const ExecutionContext& context) {
   MeshReport r;
-  r.topology = topology(mesh, options);
-  r.quality = quality(mesh, options);
-  r.area = surface_area(mesh, options);
-  r.volume = enclosed_volume(mesh, r.topology, options);
+  r.topology = topology(mesh, context);
+  r.quality = quality(mesh, context);
+  r.area = surface_area(mesh, context);
+  r.volume = enclosed_volume(mesh, r.topology, context);
   r.bounds = mesh.bounds();
-  r.self_intersecting_pairs = self_intersections(mesh, 0, options).pairs;
+  r.self_intersecting_pairs = self_intersections(mesh, 0, context).pairs;
   return r;
 }
 

@@ -115,9 +115,9 @@ struct VertexCounts {
 
 }  // namespace
 
-TopologyReport topology(const Mesh& mesh, const MetricsOptions& options) {
+TopologyReport topology(const Mesh& mesh, const ExecutionContext& context) {
   detail::check_mesh(mesh);
-  return detail::with_threads(options.threads, [&] {
+  return detail::with_threads(context, [&] {
     const std::size_t nv = mesh.num_vertices(), nt = mesh.num_triangles();
     const std::uint32_t* tri = mesh.triangles.data();
     const detail::Adjacency adj = detail::build_adjacency(mesh);

@@ -79,15 +79,12 @@ double checked_iso(const Input& in, const ExtractOptions& o) {
   return iso;
 }
 
-LevelReport measure(const Mesh& mesh, const Input& in, double iso, int threads) {
+LevelReport measure(const Mesh& mesh, const Input& in, double iso, const ExecutionContext& ctx) {
   LevelReport l;
   FieldErrorOptions fo;
   fo.inside_sign = in.inside_sign;
-  fo.threads = threads;
-  l.error = field_error(mesh, *in.field, iso, fo);
-  MetricsOptions mo;
-  mo.threads = threads;
-  l.quality = quality(mesh, mo);
+  l.error = field_error(mesh, *in.field, iso, fo, ctx);
+  l.quality = quality(mesh, ctx);
   l.triangles = mesh.num_triangles();
   l.vertices = mesh.num_vertices();
   return l;
@@ -97,7 +94,6 @@ LevelReport measure(const Mesh& mesh, const Input& in, double iso, int threads) 
 RefineOptions refine_options(const ExtractOptions& o, const SurfelComplex& sc, std::string& chosen) {
   const double h = sc.grid.min_spacing();
   RefineOptions ro;
-  ro.threads = o.context.threads;
   std::ostringstream s;
   switch (o.budget) {
     case Budget::levels:
@@ -127,7 +123,6 @@ RefineOptions refine_options(const ExtractOptions& o, const SurfelComplex& sc, s
         << " triangles (marching cubes' count)";
       break;
   }
-  ro.progress = [&ctx = o.context](const char*, double f) { ctx.report("refine", f); };
   chosen = s.str();
   return ro;
 }
@@ -201,9 +196,7 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
 
   // 2. surfels
   ctx.report("surfels", 0);
-  SurfelOptions so;
-  so.threads = ctx.threads;
-  SurfelComplex sc = build_surfels(*in.volume, iso, in.inside_sign, so);
+  SurfelComplex sc = build_surfels(*in.volume, iso, in.inside_sign, ctx);
   ctx.report("surfels", 1);
   timings["surfels"] = clock.lap();
   rss["surfels"] = peak_rss_mb();
@@ -222,18 +215,16 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
 
   // 4. covering, without the node keys and positions: they are recomputed from the volume after.
   SimplifyOptions opt;
-  opt.threads = ctx.threads;
   opt.r_max = o.r_max;
   opt.r_min = o.r_min;
   opt.unit = o.unit;
   opt.min_component_surfels = o.min_component;
-  opt.progress = [&ctx](const char* stage, double f) { ctx.report(stage, f); };
   if (opt.r_max <= 0) opt.surface_area = active_surface_area(sc, g, opt);
   release_node_geometry(sc);
   ctx.report("disk cover", 0);
   SimplifyStats stats;
-  Covering cov = build_covering(sc, g, opt, stats);
-  ctx.report("disk cover", 1);
+  Covering cov = build_covering(sc, g, opt, stats, ctx);  // reports "disk cover" 1, "voronoi" 0
+  ctx.report("voronoi", 1);
   if (o.validate) stats.validation = validate_covering(sc, g, cov);
   clock.lap();
   timings["disk_cover"] = stats.time_disk_cover_s;
@@ -245,8 +236,8 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
   ctx.report("dual", 0);
   g.release_adjacency();
   release_freed_memory();  // the covering's freed small blocks
-  restore_node_geometry(*in.volume, sc, so);
-  res.base = build_base_mesh(sc, g, std::move(cov), in.field.get(), opt, std::move(stats));
+  restore_node_geometry(*in.volume, sc, ctx);
+  res.base = build_base_mesh(sc, g, std::move(cov), in.field.get(), opt, std::move(stats), ctx);
   ctx.report("dual", 1);
   timings["dual"] = clock.lap();
   rss["dual"] = peak_rss_mb();
@@ -265,7 +256,7 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
     // 3N/4 2.10 / 2.1 %, 0.9N 2.06 / 2.1 %).
     if (o.budget == Budget::triangles && 4 * res.base.mesh.num_triangles() > 3 * o.triangles)
       decimate_to = std::max<std::size_t>(3 * o.triangles / 4, 1);
-    rep.base_improve = improve_base_mesh(res.base, in.field.get(), iso, io, decimate_to);
+    rep.base_improve = improve_base_mesh(res.base, in.field.get(), iso, io, decimate_to, ctx);
     ctx.report("improve M0", 1);
     timings["improve_base"] = clock.lap();
   }
@@ -280,7 +271,7 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
     if (ro.mode == RefineMode::max_error) rep.triangle_cap = ro.max_triangles;
     if (o.budget == Budget::max_error) rep.max_error = o.max_error;
     ctx.report("refine", 0);
-    RefineResult r = refine(sc, res.base, *in.field, ro, &g);
+    RefineResult r = refine(sc, res.base, *in.field, ro, &g, ctx);
     CutMesh cut = extract_all(r.hierarchy);
     ctx.report("refine", 1);
     timings["refine"] = clock.lap();
@@ -299,7 +290,7 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
         io.max_deviation = std::min(ro.max_error, 0.25 * io.voxel);
         io.max_error = ro.max_error;
       }
-      rep.improve = improve_mesh(cut.mesh, cut.vertex_border, in.field.get(), iso, io);
+      rep.improve = improve_mesh(cut.mesh, cut.vertex_border, in.field.get(), iso, io, nullptr, ctx);
       ctx.report("improve", 1);
       timings["improve"] = clock.lap();
     }
@@ -308,7 +299,7 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
       FitOptions fo;
       fo.max_step = 0.25 * sc.grid.min_spacing();
       fo.box = in.field->domain();
-      rep.fit = fit_least_squares(cut.mesh, cut.vertex_border, *in.field, iso, fo);
+      rep.fit = fit_least_squares(cut.mesh, cut.vertex_border, *in.field, iso, fo, ctx);
       ctx.report("fit", 1);
       timings["fit"] = clock.lap();
     }
@@ -324,13 +315,13 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
       ctx.report("measure", 0);
       const int last = ro.mode == RefineMode::uniform ? ro.levels : 0;
       for (int j = 0; j <= last; ++j) {
-        LevelReport l = measure(extract_level(*res.hierarchy, j).mesh, in, iso, ctx.threads);
+        LevelReport l = measure(extract_level(*res.hierarchy, j).mesh, in, iso, ctx);
         l.level = j;
         rep.levels.push_back(std::move(l));
         ctx.report("measure", static_cast<double>(j + 1) / (last + 2));
       }
       if (ro.mode != RefineMode::uniform) {
-        LevelReport l = measure(res.mesh, in, iso, ctx.threads);
+        LevelReport l = measure(res.mesh, in, iso, ctx);
         l.level = -1;
         l.depth = rep.depth;
         rep.levels.push_back(std::move(l));
@@ -340,7 +331,7 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
       // An explicit bound is checked, not claimed: the written mesh is measured (the summary
       // gives the measured p99 and maximum).
       ctx.report("measure", 0);
-      LevelReport l = measure(res.mesh, in, iso, ctx.threads);
+      LevelReport l = measure(res.mesh, in, iso, ctx);
       l.level = -1;
       l.depth = rep.depth;
       rep.levels.push_back(std::move(l));
@@ -355,8 +346,8 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
   sc = SurfelComplex{};
   g = ConnectivityGraph{};
   release_freed_memory();
-  rep.base_topology = topology(res.base.mesh);
-  rep.base_q_mean = quality(res.base.mesh).q_mean;
+  rep.base_topology = topology(res.base.mesh, ctx);
+  rep.base_q_mean = quality(res.base.mesh, ctx).q_mean;
   rep.covering = res.base.stats;
   rep.peak_rss_mb = peak_rss_mb();
   return res;

@@ -119,8 +119,9 @@ std::vector<std::array<double, 3>> block_weights(const std::vector<Vec3>& pos, c
 class Improver {
  public:
   Improver(const Forest& adj, const std::vector<std::array<double, 3>>& w,
-           std::vector<std::uint32_t>& part, int depth)
-      : depth_(depth),
+           std::vector<std::uint32_t>& part, int depth, StageTicker* ticker)
+      : ticker_(ticker),
+        depth_(depth),
         reach_(2 * depth + 2),
         adj_(adj),
         w_(w),
@@ -137,6 +138,7 @@ class Improver {
     for (int pass = 0; pass < 50; ++pass) {
       bool improved = false;
       for (std::uint32_t x = 0; x < part_.size(); ++x) {
+        if (ticker_) ticker_->tick();
         if (!(weight_of(x) < kGoodAngle + kGoodBonus)) continue;
         if (failed_at_[x] != 0 && dirty_[x] <= failed_at_[x]) continue;
         const std::uint32_t now = clock_;
@@ -155,6 +157,7 @@ class Improver {
   /// Longest chain (pair exchanges) searched, and the dual-graph distance within which a search
   /// from x reads the partition: the chain's k-th vertex lies within 1 + 2k of x and reads its
   /// neighbours' partners (k < depth).
+  StageTicker* ticker_;
   const int depth_, reach_;
   static constexpr double kEps = 1e-9;
   using Ops = std::vector<std::pair<std::uint32_t, std::uint32_t>>;
@@ -273,8 +276,10 @@ using MatchGraph = boost::adjacency_list<boost::vecS, boost::vecS, boost::undire
 using MatchVertex = boost::graph_traits<MatchGraph>::vertex_descriptor;
 
 /// Edmonds' augmenting paths (Boost) on g from the matching `mate` until none is left; `mate`
-/// receives the result. Returns the number of augmentations.
-std::size_t augment(const MatchGraph& g, std::vector<MatchVertex>& mate) {
+/// receives the result. Returns the number of augmentations. `ticker` (optional) is polled after
+/// every augmentation (one search over the graph: milliseconds on large bases).
+std::size_t augment(const MatchGraph& g, std::vector<MatchVertex>& mate,
+                    StageTicker* ticker = nullptr) {
   using IndexMap = boost::property_map<MatchGraph, boost::vertex_index_t>::type;
   using MateMap = boost::iterator_property_map<std::vector<MatchVertex>::iterator, IndexMap>;
   const IndexMap index = boost::get(boost::vertex_index, g);
@@ -282,7 +287,10 @@ std::size_t augment(const MatchGraph& g, std::vector<MatchVertex>& mate) {
   boost::edmonds_augmenting_path_finder<MatchGraph, MateMap, IndexMap> augmentor(g, mate_map,
                                                                                  index);
   std::size_t found = 0;
-  while (augmentor.augment_matching()) ++found;
+  while (augmentor.augment_matching()) {
+    ++found;
+    if (ticker) ticker->tick(1024);
+  }
   augmentor.get_current_matching(mate_map);
   return found;
 }
@@ -314,7 +322,7 @@ struct DoubledDual {
 /// order: the ball is closed under the matching, so Edmonds' augmenting paths in its induced
 /// subgraph are augmenting paths of the whole graph. Cost ~ (unmatched vertices) × (ball size).
 std::size_t augment_locally(const DoubledDual& d, bool good_only, int radius,
-                            std::vector<MatchVertex>& mate) {
+                            std::vector<MatchVertex>& mate, StageTicker* ticker) {
   const MatchVertex null = boost::graph_traits<MatchGraph>::null_vertex();
   std::vector<std::int32_t> local(mate.size(), -1);
   std::vector<std::uint32_t> ball, frontier, next;
@@ -322,6 +330,8 @@ std::size_t augment_locally(const DoubledDual& d, bool good_only, int radius,
   std::size_t augmentations = 0;
   for (std::uint32_t s = 0; s < mate.size(); ++s) {
     if (mate[s] != null) continue;
+    // One ball search and an Edmonds run on the ball: weighed by the ball's size (radius²).
+    if (ticker) ticker->tick(static_cast<std::uint32_t>(8 * radius * radius));
     ball.assign(1, s);
     local[s] = 0;
     frontier.assign(1, s);
@@ -369,7 +379,8 @@ std::size_t augment_locally(const DoubledDual& d, bool good_only, int radius,
 }  // namespace
 
 Blocks match_blocks(const std::vector<Vec3>& pos,
-                    const std::vector<std::array<std::uint32_t, 3>>& tris, std::size_t local_from) {
+                    const std::vector<std::array<std::uint32_t, 3>>& tris, std::size_t local_from,
+                    StageTicker* ticker) {
   const std::uint32_t F = static_cast<std::uint32_t>(tris.size());
   const Forest adj(tris, static_cast<std::uint32_t>(pos.size()));
   Blocks out;
@@ -437,7 +448,7 @@ Blocks match_blocks(const std::vector<Vec3>& pos,
     return g;
   };
   auto augment_globally = [&](bool good_only) {
-    out.augmentations += augment(whole_graph(good_only), mate);
+    out.augmentations += augment(whole_graph(good_only), mate, ticker);
   };
   auto unmatched = [&] { return std::count(mate.begin(), mate.end(), null); };
   // Maximum matching of good blocks first, then completed to a perfect matching of all.
@@ -448,7 +459,7 @@ Blocks match_blocks(const std::vector<Vec3>& pos,
     for (const bool good_only : {true, false})
       for (const int radius : {3, 8, 24}) {
         if (unmatched() == 0) break;
-        const std::size_t found = augment_locally(dual, good_only, radius, mate);
+        const std::size_t found = augment_locally(dual, good_only, radius, mate, ticker);
         out.augmentations += found;
         out.local_augmentations += found;
       }
@@ -461,7 +472,7 @@ Blocks match_blocks(const std::vector<Vec3>& pos,
   std::vector<std::uint32_t> part(F);
   for (std::uint32_t t = 0; t < F; ++t)
     part[t] = mate[t] == t + F ? t : static_cast<std::uint32_t>(mate[t]);
-  Improver(adj, w, part, F < local_from ? 10 : 6).run();
+  Improver(adj, w, part, F < local_from ? 10 : 6, ticker).run();
 
   out.labelled.resize(F);
   for (std::uint32_t t = 0; t < F; ++t) {

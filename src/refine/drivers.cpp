@@ -42,10 +42,10 @@ using namespace detail;
 
 class Refiner {
  public:
-  Refiner(const Surface& surf, const RefineOptions& opt, RefineStats& stats,
+  Refiner(const Surface& surf, const RefineOptions& opt, RefineStats& stats, StageTicker& tick,
           std::vector<std::array<std::uint32_t, 3>> base, std::vector<Vec3> pos,
           std::vector<std::uint32_t> anchor, std::vector<std::uint8_t> border)
-      : surf_(surf), opt_(opt), stats_(stats), base_(std::move(base)),
+      : surf_(surf), opt_(opt), stats_(stats), tick_(tick), base_(std::move(base)),
         forest_(base_, static_cast<std::uint32_t>(pos.size())), pos_(std::move(pos)),
         anchor_(std::move(anchor)), border_(std::move(border)),
         ws_([] { return PathWorkspace::sparse(); }) {
@@ -72,8 +72,10 @@ class Refiner {
     for (int j = 0; j < levels; ++j) {
       const std::uint32_t first = num_splits();
       const std::uint32_t ntri = static_cast<std::uint32_t>(forest_.num_base_triangles() + 4 * first);
-      for (std::uint32_t t = 0; t < ntri; ++t)
+      for (std::uint32_t t = 0; t < ntri; ++t) {
+        tick_.tick();
         if (forest_.is_leaf(t) && forest_.tri(t).level == j) split_block(t, false);
+      }
       finish_batch(first);
       report_progress(static_cast<double>(j + 1) / levels);
     }
@@ -89,6 +91,7 @@ class Refiner {
     for (int round = 0; !candidates.empty() && !budget_hit; ++round) {
       const std::uint32_t first = num_splits();
       for (const std::uint32_t t : candidates) {
+        tick_.tick();
         if (!forest_.is_leaf(t) || !(key(err_[t]) > threshold) || !refinable(t)) continue;
         if (opt_.max_triangles > 0 &&
             forest_.num_leaves() + added_by_split(t) > opt_.max_triangles) {
@@ -123,8 +126,10 @@ class Refiner {
       split_block(t, false);
       for (const std::uint32_t c : finish_batch(first))
         if (forest_.is_leaf(c) && refinable(c) && wanted(err_[c])) heap.push({key(err_[c]), c});
-      if ((num_splits() & 1023) == 0)
-        report_progress(static_cast<double>(forest_.num_leaves()) / max_triangles);
+      // One split with its forced splits, placed and evaluated: tens of microseconds.
+      tick_.tick_with(
+          [&] { return static_cast<double>(forest_.num_leaves()) / static_cast<double>(max_triangles); },
+          64);
     }
   }
 
@@ -223,12 +228,18 @@ class Refiner {
       std::size_t g1 = g0 + 1;
       const int level = forest_.tri(split_tri_[order[g0]]).level;
       while (g1 < order.size() && forest_.tri(split_tri_[order[g1]]).level == level) ++g1;
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(g0, g1, 1),
-                        [&](const tbb::blocked_range<std::size_t>& r) {
-                          PathWorkspace& ws = ws_.local();
-                          for (std::size_t i = r.begin(); i != r.end(); ++i)
-                            placed[i] = place_vertex(surf_, edge_input(order[i]), ws);
-                        });
+      // In chunks, cancellation checked between them on this thread: the placements of a level
+      // are independent of each other (committed below, in a fixed order).
+      for (std::size_t c0 = g0; c0 < g1; c0 += kChunk) {
+        const std::size_t c1 = std::min(g1, c0 + kChunk);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(c0, c1, 1),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                            PathWorkspace& ws = ws_.local();
+                            for (std::size_t i = r.begin(); i != r.end(); ++i)
+                              placed[i] = place_vertex(surf_, edge_input(order[i]), ws);
+                          });
+        tick_.tick(static_cast<std::uint32_t>(16 * (c1 - c0)));
+      }
       for (std::size_t i = g0; i < g1; ++i) {  // commit in a fixed order
         const std::uint32_t v = forest_.vertex_of_split(order[i]);
         pos_[v] = placed[i].position;
@@ -252,14 +263,18 @@ class Refiner {
   }
 
   void evaluate(const std::vector<std::uint32_t>& tris) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tris.size(), 64),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                          const auto& x = forest_.tri(tris[i]);
-                          err_[tris[i]] = evaluate_triangle(surf_.field, surf_.iso, pos_[x.v[0]],
-                                                            pos_[x.v[1]], pos_[x.v[2]]);
-                        }
-                      });
+    for (std::size_t c0 = 0; c0 < tris.size(); c0 += 4 * kChunk) {
+      const std::size_t c1 = std::min(tris.size(), c0 + 4 * kChunk);
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(c0, c1, 64),
+                        [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                            const auto& x = forest_.tri(tris[i]);
+                            err_[tris[i]] = evaluate_triangle(surf_.field, surf_.iso, pos_[x.v[0]],
+                                                              pos_[x.v[1]], pos_[x.v[2]]);
+                          }
+                        });
+      tick_.tick(static_cast<std::uint32_t>(c1 - c0));
+    }
   }
 
   template <class Key>
@@ -268,13 +283,15 @@ class Refiner {
       if (key(err_[t]) > threshold) ++stats_.at_limit_leaves;
   }
 
-  void report_progress(double f) const {
-    if (opt_.progress) opt_.progress("refine", f);
-  }
+  void report_progress(double f) { tick_.poll(f); }
+
+  /// Vertex placements per parallel batch between two cancellation checks.
+  static constexpr std::size_t kChunk = 2048;
 
   const Surface& surf_;
   const RefineOptions& opt_;
   RefineStats& stats_;
+  StageTicker& tick_;
   std::vector<std::array<std::uint32_t, 3>> base_;
   Forest forest_;
   std::vector<Vec3> pos_;
@@ -288,7 +305,9 @@ class Refiner {
 };
 
 RefineResult refine_impl(const SurfelComplex& sc, const BaseMesh& bm, const ScalarField& field,
-                         const RefineOptions& opt, const ConnectivityGraph& g) {
+                         const RefineOptions& opt, const ConnectivityGraph& g,
+                         const ExecutionContext& ctx) {
+  StageTicker tick(ctx, "refine", 4096);
   using clock = std::chrono::steady_clock;
   RefineResult res;
   RefineStats& st = res.stats;
@@ -305,7 +324,7 @@ RefineResult refine_impl(const SurfelComplex& sc, const BaseMesh& bm, const Scal
   st.base_triangles = tris.size();
 
   Blocks blocks;
-  if (!opt.force_quad_blocks) blocks = match_blocks(pos, tris, opt.local_matching_from);
+  if (!opt.force_quad_blocks) blocks = match_blocks(pos, tris, opt.local_matching_from, &tick);
   std::vector<std::array<std::uint32_t, 3>> labelled;
   if (blocks.perfect) {
     labelled = std::move(blocks.labelled);
@@ -324,7 +343,7 @@ RefineResult refine_impl(const SurfelComplex& sc, const BaseMesh& bm, const Scal
   }
   st.time_blocks_s = std::chrono::duration<double>(clock::now() - t0).count();
 
-  Refiner r(surf, opt, st, std::move(labelled), std::move(pos), std::move(anchor),
+  Refiner r(surf, opt, st, tick, std::move(labelled), std::move(pos), std::move(anchor),
             std::move(border));
   const double delta = opt.delta > 0 ? opt.delta : 0.1 * surf.h;
   auto variance_key = [](const TriError& e) {
@@ -369,7 +388,8 @@ RefineResult refine_impl(const SurfelComplex& sc, const BaseMesh& bm, const Scal
 }  // namespace
 
 RefineResult refine(const SurfelComplex& sc, const BaseMesh& bm, const ScalarField& field,
-                    const RefineOptions& opt, const ConnectivityGraph* graph) {
+                    const RefineOptions& opt, const ConnectivityGraph* graph,
+                    const ExecutionContext& ctx) {
   if (bm.mesh.num_triangles() == 0) fail_input("refine", "the base mesh has no triangles");
   if (bm.anchor.size() != bm.mesh.num_vertices() || bm.border.size() != bm.mesh.num_vertices())
     fail_input("refine", "the base mesh has no anchor or border flag for every vertex");
@@ -380,12 +400,12 @@ RefineResult refine(const SurfelComplex& sc, const BaseMesh& bm, const ScalarFie
     fail_input("refine", "max_triangles must be > 0");
   if (!(opt.tau >= 0 && opt.tau <= 1)) fail_input("refine", "tau must be in [0, 1]");
   auto run = [&] {
-    if (graph) return refine_impl(sc, bm, field, opt, *graph);
+    if (graph) return refine_impl(sc, bm, field, opt, *graph, ctx);
     const ConnectivityGraph g = build_graph(sc);
-    return refine_impl(sc, bm, field, opt, g);
+    return refine_impl(sc, bm, field, opt, g, ctx);
   };
-  if (opt.threads <= 0) return run();
-  tbb::task_arena arena(opt.threads);
+  if (ctx.threads <= 0) return run();
+  tbb::task_arena arena(ctx.threads);
   return arena.execute(run);
 }
 

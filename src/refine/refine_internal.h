@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "adamesh/context.h"
 #include "adamesh/field.h"
 #include "adamesh/graph.h"
 #include "adamesh/refine.h"
@@ -84,10 +85,11 @@ struct Blocks {
   std::size_t local_augmentations = 0;  ///< of the augmentations, found inside local balls
 };
 /// Base meshes with at least `local_from` triangles augment the greedy seed inside small balls
-/// first (blocks.cpp); smaller ones use Boost's global search only.
+/// first (blocks.cpp); smaller ones use Boost's global search only. `ticker` (optional) is ticked
+/// in the searches for augmenting paths and the improvement passes.
 Blocks match_blocks(const std::vector<Vec3>& positions,
                     const std::vector<std::array<std::uint32_t, 3>>& triangles,
-                    std::size_t local_from);
+                    std::size_t local_from, StageTicker* ticker = nullptr);
 
 /// Fallback blocks: every base triangle becomes three quads (corner, edge midpoints, centroid;
 /// new vertices placed on the surface), each quad a block of two triangles. Appends the new

@@ -21,7 +21,9 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
+#include "adamesh/context.h"
 #include "adamesh/error.h"
 #include "adamesh/improve.h"
 #include "adamesh/metrics.h"
@@ -55,7 +57,12 @@ constexpr double kMinAngleDeg = 20;
 }  // namespace
 
 FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
-                           const ScalarField& field, double iso, const FitOptions& o) {
+                           const ScalarField& field, double iso, const FitOptions& o,
+                           const ExecutionContext& context) {
+  if (context.threads > 0) {
+    tbb::task_arena arena(context.threads);
+    return arena.execute([&] { return fit_least_squares(mesh, fixed, field, iso, o); });
+  }
   FitStats st;
   const std::size_t nv = mesh.num_vertices(), nt = mesh.num_triangles();
   if (nt == 0) return st;
@@ -168,6 +175,7 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
   std::vector<double> num(nv), den(nv);
   std::vector<Vec3> next(nv);
   for (int pass = 0; pass < o.passes; ++pass) {
+    context.report("fit", static_cast<double>(pass) / o.passes);
     measure_and_sum(true);
     std::fill(num.begin(), num.end(), 0.0);
     std::fill(den.begin(), den.end(), 0.0);

@@ -19,6 +19,8 @@
 #include "adamesh/improve.h"
 #include "adamesh/metrics.h"
 
+#include "adamesh/context.h"
+
 #include <algorithm>
 #include <iterator>
 #include <array>
@@ -90,8 +92,8 @@ double segment_distance(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3&
 class Improver {
  public:
   Improver(Mesh& mesh, const std::vector<std::uint8_t>& fixed, const ScalarField* field,
-           double iso, const ImproveOptions& o)
-      : field_(field), iso_(iso), o_(o) {
+           double iso, const ImproveOptions& o, const ExecutionContext& ctx, const char* stage)
+      : field_(field), iso_(iso), o_(o), ctx_(ctx), tick_(ctx, stage, 2048) {
     const std::size_t nv = mesh.num_vertices(), nt = mesh.num_triangles();
     p_.resize(nv);
     for (std::size_t v = 0; v < nv; ++v) p_[v] = mesh.vertex(v);
@@ -118,6 +120,7 @@ class Improver {
       first = st.intersections_before;
     }
     for (int r = 0; r < o_.rounds; ++r) {
+      tick_.poll(static_cast<double>(r) / (o_.rounds + 1));
       const std::size_t f = flip_pass();
       const std::size_t m = move_pass();
       const std::size_t c = o_.collapse_below_deg > 0 ? collapse_pass() : 0;
@@ -129,6 +132,7 @@ class Improver {
     }
     // Splits give back the triangles collapses took (the budget holds), then a last flip pass:
     // the final moves and splits can leave flippable pairs.
+    tick_.poll(static_cast<double>(o_.rounds) / (o_.rounds + 1));
     if (o_.target_triangles > 0) st.splits = split_pass(o_.target_triangles);
     st.flips += flip_pass();
     if (o_.untangle) {
@@ -177,6 +181,9 @@ class Improver {
   const ScalarField* field_;
   double iso_;
   ImproveOptions o_;
+  const ExecutionContext& ctx_;  ///< threads of the intersection counts
+  /// Cancellation and progress inside the passes (mutable: the const edge walk ticks too).
+  mutable StageTicker tick_;
   double dev_ = 0;
   bool has_box_ = false;
   std::vector<Vec3> p_;
@@ -308,7 +315,8 @@ class Improver {
       id.push_back(static_cast<std::uint32_t>(t));
       for (auto v : t_[t]) m.triangles.push_back(v);
     }
-    IntersectionReport r = self_intersections(m, pairs ? m.num_triangles() * m.num_triangles() : 0);
+    IntersectionReport r =
+        self_intersections(m, pairs ? m.num_triangles() * m.num_triangles() : 0, ctx_);
     if (pairs) {
       pairs->clear();
       for (const auto& [a, b] : r.first_pairs) pairs->push_back({id[a], id[b]});
@@ -428,6 +436,7 @@ class Improver {
       std::size_t done = 0;
       for (const Cand& c : cands) {
         if (done == need) break;
+        tick_.tick();
         if (touched[c.t1] || touched[c.t2]) continue;
         if (split_edge(c.t1, c.k1, c.t2, c.k2)) {
           touched[c.t1] = touched[c.t2] = 1;
@@ -492,6 +501,7 @@ class Improver {
       const Side &s1 = sides[i], &s2 = sides[i + 1];
       if (t_[s2.t][s2.k] != t_[s1.t][(s1.k + 1) % 3] || t_[s2.t][(s2.k + 1) % 3] != t_[s1.t][s1.k])
         continue;
+      tick_.tick();
       f(s1.t, s1.k, s2.t, s2.k);
     }
   }
@@ -572,6 +582,7 @@ class Improver {
     for (std::uint32_t v = 0; v < p_.size(); ++v) {
       // Only vertices whose neighbourhood changed since they were last looked at.
       if (!dirty_[v]) continue;
+      tick_.tick();
       dirty_[v] = 0;
       if (fixed_[v] || boundary_[v] || inc_off_[v + 1] == inc_off_[v]) continue;
       bool flipped = false;
@@ -731,6 +742,7 @@ class Improver {
     std::size_t collapses = 0;
     for (std::size_t t = 0; t < t_.size(); ++t) {
       if (!tri_alive_[t]) continue;
+      tick_.tick();
       const Tri tri = t_[t];
       if (busy[tri[0]] || busy[tri[1]] || busy[tri[2]]) continue;
       if (tri_min_angle(tri) >= bad) continue;
@@ -776,6 +788,7 @@ class Improver {
       std::size_t done = 0;
       for (const auto& [len, key] : edges) {
         if (done == need) break;
+        tick_.tick();
         done += try_collapse(static_cast<std::uint32_t>(key >> 32),
                              static_cast<std::uint32_t>(key & 0xffffffffu), busy, false,
                              kFloors[floor] * kDeg);
@@ -796,9 +809,9 @@ class Improver {
 
 ImproveStats improve_mesh(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
                           const ScalarField* field, double iso, const ImproveOptions& options,
-                          std::vector<std::uint32_t>* vertex_map) {
+                          std::vector<std::uint32_t>* vertex_map, const ExecutionContext& context) {
   if (mesh.num_triangles() == 0) return {};
-  Improver imp(mesh, fixed, field, iso, options);
+  Improver imp(mesh, fixed, field, iso, options, context, "improve");
   const ImproveStats st = imp.run();
   imp.write(mesh, st.collapses > 0, vertex_map);
   mesh.normals.clear();
@@ -806,12 +819,13 @@ ImproveStats improve_mesh(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
 }
 
 ImproveStats improve_base_mesh(BaseMesh& base, const ScalarField* field, double iso,
-                               const ImproveOptions& options, std::size_t decimate_to) {
+                               const ImproveOptions& options, std::size_t decimate_to,
+                               const ExecutionContext& context) {
   std::vector<std::uint32_t> map;
   ImproveStats st;
   if (base.mesh.num_triangles() == 0) return st;
   {
-    Improver imp(base.mesh, base.border, field, iso, options);
+    Improver imp(base.mesh, base.border, field, iso, options, context, "improve M0");
     const std::size_t removed = decimate_to > 0 ? imp.decimate(decimate_to) : 0;
     st = imp.run();
     st.decimated = removed;

@@ -10,6 +10,7 @@
 #include <numeric>
 #include <utility>
 
+#include "adamesh/context.h"
 #include "adamesh/simplify.h"
 #include "disk_cover.h"
 #include "voronoi.h"
@@ -54,7 +55,8 @@ double active_surface_area(const SurfelComplex& sc, const ConnectivityGraph& g,
 }
 
 Covering build_covering(const SurfelComplex& sc, const ConnectivityGraph& g,
-                        const SimplifyOptions& opt, SimplifyStats& stats) {
+                        const SimplifyOptions& opt, SimplifyStats& stats,
+                        const ExecutionContext& ctx) {
   using namespace detail;
   const auto t0 = std::chrono::steady_clock::now();
   const std::size_t n = g.num_vertices();
@@ -81,13 +83,26 @@ Covering build_covering(const SurfelComplex& sc, const ConnectivityGraph& g,
   stats.r_max = r_max;
 
   DiskCover cover(sc, g, std::move(active), r_max, r_min, stats);
-  if (opt.progress) cover.on_progress = [&](double f) { opt.progress("disk cover", f); };
+  // Cancellation and progress inside the loops: every few thousand vertices of the Voronoi
+  // updates and checks, every 8 disk growths (one Dijkstra each, weighed 512). The repair
+  // rounds' growths count as "voronoi".
+  StageTicker cover_tick(ctx, "disk cover", 4096);
+  StageTicker vor_tick(ctx, "voronoi", 4096);
+  bool repairing = false;
+  cover.on_progress = [&](double f) {
+    if (repairing) vor_tick.tick(512);
+    else cover_tick.tick_with([f] { return f; }, 512);
+  };
   cover.seed();
   cover.run();
   stats.time_disk_cover_s += seconds_since(t0);
+  ctx.report("disk cover", 1);
 
+  ctx.report("voronoi", 0);
+  repairing = true;
   const auto t1 = std::chrono::steady_clock::now();
   Voronoi vor(sc, g);
+  vor.ticker = &vor_tick;
   auto add_new_cells = [&] {
     std::vector<std::pair<std::uint32_t, std::uint32_t>> cells;
     for (auto d : cover.take_new_disks()) cells.push_back({d, cover.centre(d)});
@@ -111,6 +126,7 @@ Covering build_covering(const SurfelComplex& sc, const ConnectivityGraph& g,
   auto check_all = [&](const std::vector<std::uint32_t>& cells, std::vector<std::uint32_t>& bad,
                        std::map<std::uint32_t, int>& kinds) {
     for (auto c : cells) {
+      vor_tick.tick();
       if (!vor.cell_alive(c)) {
         stuck.erase(c);
         continue;
@@ -126,7 +142,8 @@ Covering build_covering(const SurfelComplex& sc, const ConnectivityGraph& g,
     }
     refresh_centres();
     std::vector<std::uint32_t> global_bad;
-    dual_violations(sc, vor.cells(), centre_of_cell, global_bad, &stats.violations_by_kind);
+    dual_violations(sc, vor.cells(), centre_of_cell, global_bad, &stats.violations_by_kind,
+                    &vor_tick);
     for (auto c : global_bad) {
       bad.push_back(c);
       if (!kinds.count(c)) kinds[c] = kFanPinch;
@@ -135,6 +152,7 @@ Covering build_covering(const SurfelComplex& sc, const ConnectivityGraph& g,
     bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
   };
   for (;; ++round) {
+    vor_tick.poll(1.0 - 1.0 / (round + 2));  // the rounds' count is unknown: 1/2, 2/3, 3/4, ...
     std::vector<std::uint32_t> bad;
     std::map<std::uint32_t, int> kinds;
     auto to_check = vor.take_touched();

@@ -387,7 +387,7 @@ void DiskCover::run() {
     const Grown grown = grow(v, label_[v]);
     accept(v, grown);
     process_halvings();
-    if (on_progress && centre_.size() % 256 == 0 && active_count_ > 0)
+    if (on_progress && active_count_ > 0)
       on_progress(double(covered_count_) / double(active_count_));
   }
   // Memory: the seed filled the heap with every vertex and the growths touched the whole

@@ -75,7 +75,7 @@ class DiskCover {
   }
   /// Disks accepted since the last call.
   std::vector<std::uint32_t> take_new_disks();
-  /// Called every few hundred disks with the covered fraction of the active vertices.
+  /// Called after every disk growth with the covered fraction of the active vertices.
   std::function<void(double)> on_progress;
 
  private:

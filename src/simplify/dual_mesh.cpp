@@ -202,8 +202,10 @@ void split_cells(Covering& cov, const std::vector<std::uint8_t>& split, Simplify
 
 BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
                          Covering cov, const ScalarField* field,
-                         const SimplifyOptions& opt, SimplifyStats stats) {
+                         const SimplifyOptions& opt, SimplifyStats stats,
+                         const ExecutionContext& ctx) {
   using namespace detail;
+  StageTicker tick(ctx, "dual", 1024);
   const auto t0 = std::chrono::steady_clock::now();
   const double h = sc.grid.min_spacing();
   const auto reference = complex_topology(sc, g);
@@ -219,6 +221,7 @@ BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
                              "; meshed from its surfels");
   };
   for (int attempt = 0; attempt < 8; ++attempt) {
+    tick.poll(0);
     bm = BaseMesh{};
     // Cells without the fallback components' surfels (a copy only when there are such).
     bool any_fallback = false;
@@ -232,6 +235,7 @@ BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
     }
     const std::vector<std::uint32_t>& cells = any_fallback ? masked : cov.cell;
     HybridResult hr = hybrid_triangles(sc, cells, cov.centre, cov.cone);
+    tick.poll(0.5);
     if (!hr.problem_cells.empty()) {  // escalate: split cells into surfels, then fall back
       std::vector<std::uint8_t> split(cov.centre.size(), 0);
       for (auto c : hr.problem_cells) {
@@ -270,6 +274,7 @@ BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
       bm.component.reserve(nv);
     }
     for (std::uint32_t c = 0; c < ncell; ++c) {
+      tick.tick();  // a projection per cell
       const auto comp = g.component[cov.centre[c]];
       if (cov.fallback[comp] || !used[c]) continue;
       Vec3 p = sc.cvertex_position(cov.centre[c]);
@@ -408,12 +413,12 @@ BaseMesh build_base_mesh(const SurfelComplex& sc, const ConnectivityGraph& g,
 }
 
 BaseMesh simplify(const SurfelComplex& complex, const ScalarField* field,
-                  const SimplifyOptions& options) {
+                  const SimplifyOptions& options, const ExecutionContext& context) {
   const ConnectivityGraph g = build_graph(complex);
   SimplifyStats stats;
-  const Covering cov = build_covering(complex, g, options, stats);
+  const Covering cov = build_covering(complex, g, options, stats, context);
   if (options.validate) stats.validation = validate_covering(complex, g, cov);
-  return build_base_mesh(complex, g, cov, field, options, std::move(stats));
+  return build_base_mesh(complex, g, cov, field, options, std::move(stats), context);
 }
 
 }  // namespace adamesh

@@ -109,6 +109,7 @@ void Voronoi::add_cells(const std::vector<std::pair<std::uint32_t, std::uint32_t
   };
   for (const auto& [c, x] : cells) offer(0.0, x, c);
   while (!heap.empty()) {
+    if (ticker) ticker->tick();
     const Entry e = heap.front();
     slot[e.v] = kNone;
     if (heap.size() > 1) {
@@ -169,6 +170,7 @@ std::size_t Voronoi::regularize() {
     std::array<std::int32_t, 4> fan;
     for (std::size_t word = 0; word < scan.size(); ++word) {
       for (std::uint64_t bits = scan[word]; bits != 0; bits &= bits - 1) {
+        if (ticker) ticker->tick();
         const auto n = static_cast<std::uint32_t>(64 * word + std::countr_zero(bits));
         if (!ccw_fan(sc_, n, fan)) continue;
         std::array<std::uint32_t, 4> c;
@@ -386,7 +388,11 @@ namespace adamesh::detail {
 
 void dual_violations(const SurfelComplex& sc, const std::vector<std::uint32_t>& cell,
                      const std::vector<std::uint32_t>& centre_of_cell,
-                     std::vector<std::uint32_t>& violated, std::vector<std::size_t>* kinds) {
+                     std::vector<std::uint32_t>& violated, std::vector<std::size_t>* kinds,
+                     StageTicker* ticker) {
+  auto tick = [ticker] {
+    if (ticker) ticker->tick();
+  };
   // Memory (docs/SIMPLIFICATION.md): junctions are visited again instead of being stored — once
   // for pinches, the triangle count and the quad diagonals, once over the fans for which
   // diagonals are dual edges, once hashing the triangles and, when hashes collide, once more to
@@ -401,6 +407,7 @@ void dual_violations(const SurfelComplex& sc, const std::vector<std::uint32_t>& 
   std::array<std::uint32_t, 4> runs;
   int r = 0;
   for (std::uint32_t n = 0; n < sc.num_nodes(); ++n) {
+    tick();
     const JunctionKind kind = junction_at(sc, cell, n, runs, r);
     if (kind == JunctionKind::pinched) {
       for (int i = 0; i < r; ++i) pinched.push_back(runs[i]);
@@ -446,6 +453,7 @@ void dual_violations(const SurfelComplex& sc, const std::vector<std::uint32_t>& 
   // on), so one pass over the fans finds them.
   if (any_diagonal)
     for (std::uint32_t n = 0; n < sc.num_nodes(); ++n) {
+      tick();
       const auto& fan = sc.node_fan[n];
       for (int q = 0; q < 4; ++q) {
         const std::int32_t s0 = fan[q], s1 = fan[(q + 1) & 3];
@@ -479,6 +487,7 @@ void dual_violations(const SurfelComplex& sc, const std::vector<std::uint32_t>& 
       emit_sorted(t);
     };
     for (std::uint32_t n = 0; n < sc.num_nodes(); ++n) {
+      tick();
       if (junction_at(sc, cell, n, runs, r) != JunctionKind::junction) continue;
       const auto& c = runs;
       if (r == 3) {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "adamesh/context.h"
 #include "adamesh/simplify.h"
 
 namespace adamesh::detail {
@@ -29,6 +30,8 @@ class Voronoi {
   static constexpr std::uint32_t kNone = 0xffffffffu;
 
   Voronoi(const SurfelComplex& sc, const ConnectivityGraph& g);
+  /// Optional: ticked in the long loops (cancellation, progress); never changes the result.
+  StageTicker* ticker = nullptr;
 
   /// Adds cells with the given centres (cell id → centre c-vertex) by multi-source Dijkstra from
   /// the new centres only: a vertex changes cell only when it gets strictly closer (ties: the
@@ -105,7 +108,8 @@ namespace adamesh::detail {
 /// `violated` (sorted, unique; kinds 4 and 5 counted in `kinds`).
 void dual_violations(const SurfelComplex& sc, const std::vector<std::uint32_t>& cell,
                      const std::vector<std::uint32_t>& centre_of_cell,
-                     std::vector<std::uint32_t>& violated, std::vector<std::size_t>* kinds);
+                     std::vector<std::uint32_t>& violated, std::vector<std::size_t>* kinds,
+                     StageTicker* ticker = nullptr);
 
 }  // namespace adamesh::detail
 

@@ -31,6 +31,7 @@
 #include <string>
 #include <type_traits>
 
+#include "adamesh/context.h"
 #include "adamesh/error.h"
 #include "adamesh/surfels.h"
 #include "surfels/cell_table.h"
@@ -493,11 +494,11 @@ void release_node_geometry(SurfelComplex& complex) {
 }
 
 void restore_node_geometry(const Volume& volume, SurfelComplex& complex,
-                           const SurfelOptions& options) {
+                           const ExecutionContext& context) {
   if (complex.num_nodes() == 0 || (!complex.node_key.empty() && !complex.node_pos.empty())) return;
   if (volume.grid.dims != complex.grid.dims)
     fail(Status::invalid_input, "restore_node_geometry: the volume does not match the complex");
-  const int threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
+  const int threads = context.threads > 0 ? context.threads : tbb::info::default_concurrency();
   tbb::task_arena arena(threads);
   arena.execute([&] {
     dispatch_scalar(volume.type, [&](auto zero) {
@@ -508,7 +509,7 @@ void restore_node_geometry(const Volume& volume, SurfelComplex& complex,
 }
 
 SurfelComplex build_surfels(const Volume& volume, double iso, double inside_sign,
-                            const SurfelOptions& options) {
+                            const ExecutionContext& context) {
   if (!std::isfinite(iso))
     fail(Status::invalid_input, "build_surfels: the iso-value must be finite");
   if (!(inside_sign == 1 || inside_sign == -1))
@@ -527,7 +528,7 @@ SurfelComplex build_surfels(const Volume& volume, double iso, double inside_sign
       volume.data.size() <
           static_cast<std::size_t>(volume.grid.num_samples()) * scalar_size(volume.type))
     fail(Status::internal, "build_surfels: volume sample buffer smaller than its grid");
-  const int threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
+  const int threads = context.threads > 0 ? context.threads : tbb::info::default_concurrency();
   tbb::task_arena arena(threads);
   arena.execute([&] {
     dispatch_scalar(volume.type, [&](auto zero) {
