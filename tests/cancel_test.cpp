@@ -58,13 +58,17 @@ std::pair<Status, double> cancel_inside(const std::string& spec, ExtractOptions 
     if (cv.wait_for(lock, delay, [&] { return stop; })) return;  // finished meanwhile
     set_at = Clock::now();
     cancel = true;
+    cv.notify_all();
   });
   o.context.cancel = &cancel;
   o.context.progress = [&](const char* s, double f) {
-    if (s == stage && f > 0 && f < 1) {
-      std::lock_guard lock(m);
+    if (s == stage && f > 0 && f < 1 && !inside) {
+      std::unique_lock lock(m);
       inside = true;
-      cv.notify_one();
+      cv.notify_all();
+      // Without a delay the stage waits for the flag, so that a short stage cannot end before
+      // the other thread has woken up (a loaded machine): the library's next check must see it.
+      if (delay.count() == 0) cv.wait_for(lock, std::chrono::seconds(10), [&] { return cancel.load(); });
     }
   };
   const Status st = status_of([&] { extract(spec, o); });

@@ -45,7 +45,9 @@ class StageTicker {
  public:
   StageTicker(const ExecutionContext& ctx, const char* stage, std::uint32_t every = 4096) noexcept
       : ctx_(ctx), stage_(stage), every_(every > 0 ? every : 1),
-        last_(std::chrono::steady_clock::now()) {}
+        // The first due report comes at once (after `every` iterations), then at most every
+        // 0.1 s: a stage shorter than 0.1 s still reports from inside.
+        last_(std::chrono::steady_clock::now() - std::chrono::seconds(1)) {}
   /// `weight` iterations (default one) of a loop that does not know its fraction: the last one
   /// reported is repeated.
   void tick(std::uint32_t weight = 1) {

@@ -19,6 +19,7 @@ one-line messages as the command line. See docs/PYTHON.md.
 from __future__ import annotations
 
 import json
+import math
 import os
 import sys
 from dataclasses import dataclass, field
@@ -414,8 +415,8 @@ def extract(source: Union[Volume, PathLike], iso: Optional[float] = None, *,
             triangles: Optional[int] = None, max_error: Optional[float] = None,
             levels: Optional[int] = None, base_only: bool = False,
             rmax: Optional[float] = None, rmin: Optional[float] = None, voxels: bool = False,
-            min_component: int = 0, min_cavity: int = 0, improve: bool = True,
-            validate: bool = False,
+            min_component: int = 0, min_cavity: int = 0, max_handle: float = 0,
+            improve: bool = True, fit: str = "surface", validate: bool = False,
             measure: bool = False, threads: int = 0, progress: Any = None,
             **input_options: Any) -> Result:
     """Adaptive mesh of the iso-surface ``iso`` of ``source`` (a Volume, a volume file,
@@ -426,7 +427,9 @@ def extract(source: Union[Volume, PathLike], iso: Optional[float] = None, *,
     cubes' triangle count. ``base_only=True``: the base mesh M0 alone, no hierarchy.
     ``rmax``/``rmin`` disk radii (world units, voxels with ``voxels=True``), ``min_component``
     (drop smaller components, surfels), ``min_cavity`` (fill enclosed pockets of outside under
-    that many voxels), ``improve`` (shape improvement, --no-improve),
+    that many voxels), ``max_handle`` (cut handles and plug tunnels whose shortest loop is under
+    that many voxels), ``improve`` (shape improvement, --no-improve), ``fit`` ("surface", or
+    "l2": least-squares vertex offsets, lower RMS distance),
     ``validate`` (covering validator), ``measure`` (per-level error figures in the report),
     ``threads`` (0 = all cores), ``progress`` (callable(stage, fraction), or True for tqdm).
     File and shape inputs take the keywords of :func:`load`.
@@ -454,7 +457,11 @@ def extract(source: Union[Volume, PathLike], iso: Optional[float] = None, *,
     o.unit = _adamesh.LengthUnit.voxels if voxels else _adamesh.LengthUnit.world
     o.min_component = _count(min_component, "min_component", 0)
     o.min_cavity = _count(min_cavity, "min_cavity", 0)
+    if not (isinstance(max_handle, (int, float)) and math.isfinite(max_handle) and max_handle >= 0):
+        raise UsageError(f"extract: max_handle must be a length >= 0 (voxels), not {max_handle!r}")
+    o.max_handle = float(max_handle)
     o.improve = bool(improve)
+    o.fit = str(fit)
     o.validate = bool(validate)
     o.measure_levels = bool(measure)
     o.threads = _count(threads, "threads", 0)

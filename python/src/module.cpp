@@ -467,6 +467,15 @@ PYBIND11_MODULE(_adamesh, m) {
       .def_readwrite("validate", &ExtractOptions::validate)
       .def_readwrite("min_cavity", &ExtractOptions::min_cavity)
       .def_readwrite("improve", &ExtractOptions::improve)
+      .def_readwrite("max_handle", &ExtractOptions::max_handle)
+      .def_property(
+          "fit",
+          [](const ExtractOptions& o) { return o.fit == ExtractOptions::Fit::l2 ? "l2" : "surface"; },
+          [](ExtractOptions& o, const std::string& f) {
+            if (f == "l2") o.fit = ExtractOptions::Fit::l2;
+            else if (f == "surface") o.fit = ExtractOptions::Fit::surface;
+            else fail(Status::usage, "extract: fit must be 'surface' or 'l2', not '" + f + "'");
+          })
       .def_readwrite("measure_levels", &ExtractOptions::measure_levels)
       .def_property(
           "threads", [](const ExtractOptions& o) { return o.context.threads; },

@@ -165,3 +165,32 @@ def test_stats_match_the_cli(tmp_path):
     py = adamesh.stats(tmp_path / "m.ply", field=HEAD, iso=500.5, reference=tmp_path / "mc.ply")
     assert py == json.loads(out)
     assert adamesh.stats(r.mesh)["triangles"] == len(r.faces)
+
+
+def test_topology_control_and_fit_match_the_cli(tmp_path):
+    # A ball with a thin ring through it (genus 1): max_handle cuts the ring.
+    n = 48
+    z, y, x = np.mgrid[0:n, 0:n, 0:n].astype(np.float32)
+    ball = 12 - np.sqrt((x - 20) ** 2 + (y - 24) ** 2 + (z - 24) ** 2)
+    q = np.sqrt((np.sqrt((x - 32) ** 2 + (z - 24) ** 2) - 8) ** 2 + (y - 24) ** 2)
+    vol = adamesh.Volume(np.maximum(ball, 1.3 - q), order="zyx")
+    plain = adamesh.extract(vol, 0.0, triangles=2000)
+    cut = adamesh.extract(vol, 0.0, triangles=2000, max_handle=10)
+    assert plain.report["base"]["euler"] == 0 and cut.report["base"]["euler"] == 2
+    assert cut.report["topology_control"]["handles_cut"] == 1
+    with pytest.raises(adamesh.UsageError):
+        adamesh.extract(vol, 0.0, max_handle=-1)
+    # fit="l2": lower error than the vertices on the surface, the same as --fit l2.
+    s = adamesh.extract("shape:torus", triangles=3000)
+    f = adamesh.extract("shape:torus", triangles=3000, fit="l2")
+    fit = f.report["refine"]["fit"]
+    assert fit["method"] == "l2" and fit["rms_first_order_after"] < 0.7 * fit["rms_first_order_before"]
+    assert s.report["refine"]["fit"] == {"method": "surface"}
+    assert len(f.faces) == len(s.faces)
+    out = tmp_path / "t.ply"
+    run_cli("extract", "shape:torus", "--triangles", "3000", "--fit", "l2", "-o", out, "--quiet")
+    cli = adamesh.read_mesh(out)
+    assert np.array_equal(np.asarray(cli.vertices, dtype=np.float32),
+                          np.asarray(f.vertices, dtype=np.float32))
+    with pytest.raises(adamesh.UsageError):
+        adamesh.extract("shape:torus", fit="l1")
