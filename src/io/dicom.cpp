@@ -22,6 +22,7 @@
 #include <map>
 #include <sstream>
 #include <type_traits>
+#include <utility>
 
 #include "adamesh/error.h"
 #include "io/volume_readers.h"
@@ -229,7 +230,9 @@ Volume read_dicom_series(const std::vector<std::string>& files, const std::strin
       fail_input(slices[k].file, "pixel data shorter than the image size");
     rescale[k] = {img.GetSlope(), img.GetIntercept()};
     formats.push_back(pf);
-    const auto [slope, icpt] = rescale[k];
+    // Plain variables, not a structured binding: clang 14 (the fuzz preset) cannot capture
+    // those in the lambdas below.
+    const double slope = std::get<0>(rescale[k]), icpt = std::get<1>(rescale[k]);
     if (slope != std::floor(slope) || icpt != std::floor(icpt) || !(slope != 0)) integral = false;
     // Range of the rescaled values: the output type is the smallest that holds them exactly.
     const char* src = buffers[k].data();
@@ -297,7 +300,9 @@ Volume read_dicom_series(const std::vector<std::string>& files, const std::strin
   const std::size_t per_slice = static_cast<std::size_t>(size[0] * size[1]);
   for (std::size_t k = 0; k < nz; ++k) {
     const gdcm::PixelFormat& pf = formats[k];
-    const auto [slope, icpt] = rescale[k];
+    // Plain variables, not a structured binding: clang 14 (the fuzz preset) cannot capture
+    // those in the lambdas below.
+    const double slope = std::get<0>(rescale[k]), icpt = std::get<1>(rescale[k]);
     const char* src = buffers[k].data();
     dispatch_scalar(type, [&](auto out_tag) {
       using Out = decltype(out_tag);
