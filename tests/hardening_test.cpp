@@ -537,5 +537,45 @@ TEST(Hardening, MeshToStandardOutputErrors) {
   }
 }
 
+// ------------------------------------------------------------------ found by fuzzing (issue 17)
+
+TEST(Hardening, DicomPreambleWithACutShortMetaHeaderIsAnError) {
+  // fuzz_metaimage, fuzz_slc, fuzz_nrrd: any bytes with "DICM" at offset 128 went to GDCM, whose
+  // assertions (kept in Debian's build) aborted on a meta header cut short (gdcmReader.cxx:385)
+  // or an element running past the end (gdcmFileMetaInformation.cxx:436): exit 134 from `info`.
+  TempDir tmp;
+  const std::string prefixes[] = {std::string(128, '\0'),
+                                  "NRRD0004\n" + std::string(119, '\xc7'),
+                                  "NDims = 3\nElementDataFile = x\n" + std::string(98, '\xff'),
+                                  "Hiz" + std::string(125, '\xff')};
+  const std::string tails[] = {"", "\x0b\x0b", std::string("\x02\x00", 2),
+                               std::string("\x02\x00\x10\x00UI\x04\x00", 10),
+                               std::string("\x02\x00\x10\x00OB\x00\x00\xff\xff\xff\x7f", 12)};
+  int n = 0;
+  for (const std::string ext : {".mha", ".nrrd", ".slc", ".nii", ".vtk", ".vti", ".mrc", ".dcm", ""})
+    for (const auto& prefix : prefixes)
+      for (const auto& tail : tails) {
+        ASSERT_EQ(prefix.size(), 128u);
+        const std::string path = tmp.file("f" + std::to_string(n++) + ext);
+        write_bytes(path, prefix + "DICM" + tail);
+        EXPECT_THROW((void)read_volume(path), Error) << path;
+      }
+  // The command line: one error line, exit 2, for a named slice and for its folder.
+  fs::create_directory(tmp.file("series"));
+  write_bytes(tmp.file("series/s.dcm"), std::string(128, '\0') + "DICM" + std::string("\x02\x00", 2));
+  auto r = run_cli("info " + tmp.file("series/s.dcm"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("not a readable DICOM file"), std::string::npos) << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  r = run_cli("info " + tmp.file("series"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  // A .mha with the magic is read as MetaImage (its own error), not as DICOM.
+  write_bytes(tmp.file("m.mha"), prefixes[2] + "DICM\x0b\x0b");
+  r = run_cli("info " + tmp.file("m.mha"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(r.err.find("DICOM"), std::string::npos) << r.err;
+}
+
 }  // namespace
 }  // namespace adamesh
