@@ -341,6 +341,15 @@ TEST(Hardening, ControlBytesInMessagesAreEscaped) {
   EXPECT_EQ(r.err.find('\x1b'), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find('\x07'), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("\\x1b[2J"), std::string::npos) << r.err;
+  // Bytes above 0x7f: a stray 0x9b (CSI on 8-bit terminals), a C1 control in UTF-8 (U+009B) and
+  // invalid UTF-8 are escaped; UTF-8 text stays as it is (found by fuzz_metaimage: raw 0xff bytes
+  // of a header were echoed).
+  const std::string utf = tmp.file("utf.nrrd");
+  write_bytes(utf, "NRRD0004\ntype: \x9b" "2J\xc2\x9b" "2J\xff\xfe caf\xc3\xa9 \xe2\x84\x83\ndimension: 3\n"
+                   "sizes: 4 4 4\nencoding: raw\n\n" + std::string(64, '\0'));
+  const auto u = run_cli("info " + utf);
+  EXPECT_EQ(u.exit_code, 2) << u.err;
+  EXPECT_NE(u.err.find("\\x9b2J\\xc2\\x9b2J\\xff\\xfe caf\xc3\xa9 \xe2\x84\x83"), std::string::npos) << u.err;
 }
 
 TEST(Hardening, CommandLineMessages) {

@@ -154,11 +154,40 @@ void check_iso_in_range(const Input& in, double iso) {
   }
 }
 
+namespace {
+
+/// Length of the well-formed UTF-8 sequence at s[i] that is not a C1 control (U+0080..U+009F,
+/// which 8-bit terminals take as escape sequences, e.g. 0x9b = CSI), or 0.
+std::size_t printable_utf8(const std::string& s, std::size_t i) {
+  const auto at = [&](std::size_t k) { return static_cast<unsigned char>(s[k]); };
+  const unsigned char c = at(i);
+  const std::size_t n = c >= 0xc2 && c <= 0xdf ? 2 : c >= 0xe0 && c <= 0xef ? 3 : c >= 0xf0 && c <= 0xf4 ? 4 : 0;
+  if (n == 0 || i + n > s.size()) return 0;
+  for (std::size_t k = 1; k < n; ++k)
+    if (at(i + k) < 0x80 || at(i + k) > 0xbf) return 0;
+  if (c == 0xc2 && at(i + 1) <= 0x9f) return 0;  // C1 control
+  return n;
+}
+
+}  // namespace
+
 std::string one_line(const std::string& message) {
   std::string out;
   out.reserve(message.size());
-  for (const char ch : message) {
+  for (std::size_t i = 0; i < message.size(); ++i) {
+    const char ch = message[i];
     const auto c = static_cast<unsigned char>(ch);
+    if (c >= 0x80) {  // UTF-8 text is kept; stray bytes and C1 controls are escaped
+      if (const std::size_t n = printable_utf8(message, i)) {
+        out.append(message, i, n);
+        i += n - 1;
+      } else {
+        char hex[8];
+        std::snprintf(hex, sizeof hex, "\\x%02x", c);
+        out += hex;
+      }
+      continue;
+    }
     if (c == '\n') out += "\\n";
     else if (c == '\t') out += "\\t";
     else if (c == '\r') out += "\\r";

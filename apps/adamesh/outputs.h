@@ -55,8 +55,9 @@ void write_mesh_output(const Mesh& mesh, const std::string& path, const MeshWrit
 /// every command that extracts a surface).
 void check_iso_in_range(const Input& in, double iso);
 
-/// `message` on one line: control characters (including line breaks) and DEL become \n, \t or
-/// \xNN, so a header's bytes cannot move the cursor or inject lines into the terminal.
+/// `message` on one line: control characters (including line breaks), DEL, C1 controls and bytes
+/// that are not well-formed UTF-8 become \n, \t or \xNN, so a header's bytes cannot move the
+/// cursor or inject lines into the terminal; UTF-8 text (file names, units) is kept.
 std::string one_line(const std::string& message);
 
 }  // namespace adamesh::cli
