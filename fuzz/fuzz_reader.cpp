@@ -3,12 +3,23 @@
 // The input bytes go to a file with that extension (the readers take paths) and are read; the
 // only accepted failure is adamesh::Error — a crash, a sanitizer report, a hang or an allocation
 // beyond libFuzzer's -malloc_limit_mb is a finding.
+//
+// The .amh target (FUZZ_KIND 2) re-seals its input before reading it: a .amh file ends with an
+// FNV-1a checksum of everything before it and its size must match the header's counts, so
+// nearly every raw mutation would stop at the size or checksum check. seal_amh() sets the split
+// count to what the bytes hold, pads or trims to the announced size and rewrites the checksum,
+// so the mutations reach the body, the validation and the replay. The raw bytes are also read
+// with allow_partial (the `--partial` path, where a size mismatch skips the checksum). A custom
+// mutator seals most mutants too, so the stored corpus holds consistent files.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <string>
+#include <vector>
 
 #include "adamesh/error.h"
 #include "adamesh/io.h"
@@ -26,16 +37,111 @@ const std::string& scratch_path() {
   return path;
 }
 
+bool write_scratch(const std::uint8_t* data, std::size_t size) {
+  std::FILE* f = std::fopen(scratch_path().c_str(), "wb");
+  if (!f) return false;
+  if (size > 0) std::fwrite(data, 1, size, f);
+  std::fclose(f);
+  return true;
+}
+
+#if FUZZ_KIND == 2
+// The .amh layout (src/refine/amh_io.cpp): a 104-byte header (magic, version, flags, counts
+// V0 F0 S at offsets 16, 24, 32), V0 positions (24 bytes), V0 border flags (1), V0 anchors (4,
+// when flags bit 0), F0 triangles (12), S splits (32), then the 8-byte checksum. Little-endian.
+constexpr std::size_t kAmhHeader = 104, kAmhSplit = 32, kAmhFooter = 8;
+constexpr std::size_t kAmhMaxGrowth = 4096;  // never pad a mutant by more than this
+
+std::uint64_t load_u64(const std::uint8_t* p) {
+  std::uint64_t v = 0;
+  for (int i = 7; i >= 0; --i) v = (v << 8) | p[i];
+  return v;
+}
+std::uint32_t load_u32(const std::uint8_t* p) {
+  return static_cast<std::uint32_t>(p[0]) | static_cast<std::uint32_t>(p[1]) << 8 |
+         static_cast<std::uint32_t>(p[2]) << 16 | static_cast<std::uint32_t>(p[3]) << 24;
+}
+void store_u64(std::uint8_t* p, std::uint64_t v) {
+  for (int i = 0; i < 8; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
+}
+
+/// Size of `bytes` once sealed (split count fitted to the bytes, footer appended), or 0 when the
+/// header's base counts are out of range or would need more than kAmhMaxGrowth bytes of padding:
+/// such inputs stay as they are and exercise the header checks.
+std::size_t sealed_size(const std::uint8_t* data, std::size_t size) {
+  if (size < kAmhHeader) return 0;
+  const std::uint64_t v0 = load_u64(data + 16), f0 = load_u64(data + 24);
+  if (v0 > 0xffffffffull || f0 > 0xffffffffull) return 0;
+  const bool anchors = load_u32(data + 12) & 1u;
+  const std::uint64_t fixed = kAmhHeader + v0 * (24 + 1 + (anchors ? 4 : 0)) + f0 * 12;
+  if (fixed + kAmhFooter > size + kAmhMaxGrowth) return 0;
+  const std::uint64_t splits = size >= fixed + kAmhFooter ? (size - fixed - kAmhFooter) / kAmhSplit : 0;
+  return static_cast<std::size_t>(fixed + splits * kAmhSplit + kAmhFooter);
+}
+
+/// Seals `bytes` (of which the first `size` are the input) in place to `sealed` bytes: split
+/// count, padding or trimming, FNV-1a checksum as write_hierarchy() computes it.
+void seal(std::uint8_t* bytes, std::size_t size, std::size_t sealed) {
+  if (sealed > size) std::memset(bytes + size, 0, sealed - size);
+  const std::uint64_t v0 = load_u64(bytes + 16), f0 = load_u64(bytes + 24);
+  const bool anchors = load_u32(bytes + 12) & 1u;
+  const std::uint64_t fixed = kAmhHeader + v0 * (24 + 1 + (anchors ? 4 : 0)) + f0 * 12;
+  store_u64(bytes + 32, (sealed - kAmhFooter - fixed) / kAmhSplit);
+  std::uint64_t h = 1469598103934665603ull;
+  for (std::size_t i = 0; i + kAmhFooter < sealed; ++i) {
+    h ^= bytes[i];
+    h *= 1099511628211ull;
+  }
+  store_u64(bytes + sealed - kAmhFooter, h);
+}
+
+void read_amh(bool allow_partial) {
+  adamesh::HierarchyReadOptions options;
+  options.allow_partial = allow_partial;
+  try {
+    const adamesh::Hierarchy h = adamesh::read_hierarchy(scratch_path(), options);
+    (void)adamesh::extract_all(h);  // a validated hierarchy must replay
+  } catch (const adamesh::Error&) {
+  }
+}
+#endif
+
 }  // namespace
 
+#if FUZZ_KIND == 2
+extern "C" std::size_t LLVMFuzzerMutate(std::uint8_t* data, std::size_t size, std::size_t max_size);
+
+// Mutate, then seal 7 mutants in 8 (the eighth stays raw: size and checksum errors, --partial).
+extern "C" std::size_t LLVMFuzzerCustomMutator(std::uint8_t* data, std::size_t size,
+                                               std::size_t max_size, unsigned int seed) {
+  size = LLVMFuzzerMutate(data, size, max_size);
+  if (seed % 8 == 0) return size;
+  const std::size_t sealed = sealed_size(data, size);
+  if (sealed == 0 || sealed > max_size) return size;
+  seal(data, size, sealed);
+  return sealed;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::size_t sealed = sealed_size(data, size);
+  std::vector<std::uint8_t> copy(data, data + size);
+  if (sealed != 0) {
+    copy.resize(std::max(size, sealed));
+    seal(copy.data(), size, sealed);
+    copy.resize(sealed);
+  }
+  if (!write_scratch(copy.data(), copy.size())) return 0;
+  read_amh(false);  // the sealed file: body, validation, replay
+  if (copy.size() != size || (size > 0 && std::memcmp(copy.data(), data, size) != 0)) {
+    if (!write_scratch(data, size)) return 0;
+    read_amh(true);  // the raw bytes as `level --partial` reads them
+  }
+  return 0;
+}
+#else
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string& path = scratch_path();
-  if (std::FILE* f = std::fopen(path.c_str(), "wb")) {
-    if (size > 0) std::fwrite(data, 1, size, f);
-    std::fclose(f);
-  } else {
-    return 0;
-  }
+  if (!write_scratch(data, size)) return 0;
   try {
 #if FUZZ_KIND == 0
     const adamesh::Volume v = adamesh::read_volume(path);
@@ -45,12 +151,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const adamesh::Mesh m = adamesh::read_mesh(path);
     for (const std::uint32_t i : m.triangles)
       if (i >= m.num_vertices()) __builtin_trap();  // the reader must reject bad indices
-#else
-    const adamesh::Hierarchy h = adamesh::read_hierarchy(path);
-    (void)adamesh::extract_all(h);  // a validated hierarchy must replay
 #endif
   } catch (const adamesh::Error&) {
     // A clean, typed rejection: what a malformed input should get.
   }
   return 0;
 }
+#endif

@@ -359,6 +359,15 @@ TEST(Hardening, ControlBytesInMessagesAreEscaped) {
   EXPECT_EQ(r.err.find('\x1b'), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find('\x07'), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("\\x1b[2J"), std::string::npos) << r.err;
+  // Bytes above 0x7f: a stray 0x9b (CSI on 8-bit terminals), a C1 control in UTF-8 (U+009B) and
+  // invalid UTF-8 are escaped; UTF-8 text stays as it is (found by fuzz_metaimage: raw 0xff bytes
+  // of a header were echoed).
+  const std::string utf = tmp.file("utf.nrrd");
+  write_bytes(utf, "NRRD0004\ntype: \x9b" "2J\xc2\x9b" "2J\xff\xfe caf\xc3\xa9 \xe2\x84\x83\ndimension: 3\n"
+                   "sizes: 4 4 4\nencoding: raw\n\n" + std::string(64, '\0'));
+  const auto u = run_cli("info " + utf);
+  EXPECT_EQ(u.exit_code, 2) << u.err;
+  EXPECT_NE(u.err.find("\\x9b2J\\xc2\\x9b2J\\xff\\xfe caf\xc3\xa9 \xe2\x84\x83"), std::string::npos) << u.err;
 }
 
 TEST(Hardening, CommandLineMessages) {
@@ -411,6 +420,188 @@ TEST(Hardening, AllNanVolumeInfo) {
   for (const auto& [k, p] : j["percentiles"].items()) EXPECT_TRUE(p.is_null()) << k;
   r = run_cli("mc " + path + " --iso 0 -o " + tmp.file("x.ply"));
   EXPECT_EQ(r.exit_code, 2) << r.err;
+}
+
+// ------------------------------------------------------------- outputs of `view`, `-o -` stdout
+
+TEST(Hardening, ViewOutputIsCheckedBeforeAnyWork) {
+  // `view` goes through the same checks as the other commands, before reading its input or
+  // looking for the viewer bundle (so these hold in builds without the npm packages too).
+  TempDir tmp;
+  const std::string victim = tmp.file("victim.txt");
+  write_bytes(victim, "keep me");
+  fs::create_symlink(victim, tmp.file("link.html"));
+  const std::string missing = tmp.file("missing.amh");  // would be exit 2 if it were read first
+  auto r = run_cli("view " + missing + " -o " + tmp.file("link.html"));
+  EXPECT_EQ(r.exit_code, 4) << r.err;
+  EXPECT_NE(r.err.find("symbolic link"), std::string::npos) << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_EQ(read_bytes(victim), "keep me");
+  EXPECT_TRUE(fs::is_symlink(tmp.file("link.html")));
+  fs::create_directory(tmp.file("dir.html"));
+  r = run_cli("view " + missing + " -o " + tmp.file("dir.html"));
+  EXPECT_EQ(r.exit_code, 4) << r.err;
+  r = run_cli("view " + missing + " -o " + tmp.file("no/such/v.html"));
+  EXPECT_EQ(r.exit_code, 4) << r.err;
+  EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
+  r = run_cli("view " + missing + " -o /dev/null.html");  // a folder that cannot be written
+  if (geteuid() != 0) EXPECT_EQ(r.exit_code, 4) << r.err;
+  r = run_cli("view " + missing + " -o " + tmp.file("v.png"));
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("HTML"), std::string::npos) << r.err;
+  r = run_cli("view " + missing + " -o -");  // no page to standard output
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_TRUE(r.out.empty());
+  if (geteuid() != 0) {
+    fs::create_directory(tmp.file("ro"));
+    fs::permissions(tmp.file("ro"), fs::perms::owner_read | fs::perms::owner_exec);
+    r = run_cli("view " + missing + " -o " + tmp.file("ro/v.html"));
+    EXPECT_EQ(r.exit_code, 4) << r.err;
+    EXPECT_NE(r.err.find("not writable"), std::string::npos) << r.err;
+  }
+  // A good name gets past the checks: the missing input (2) or a build without viewer (3).
+  r = run_cli("view " + missing + " -o " + tmp.file("v.html"));
+  EXPECT_TRUE(r.exit_code == 2 || r.exit_code == 3) << r.err;
+  EXPECT_FALSE(fs::exists(tmp.file("v.html")));
+}
+
+/// Runs a shell command line (stdout and stderr redirected by the caller) and returns its exit
+/// status; 128 + N when the shell reports signal N.
+int shell(const std::string& cmd) {
+  const int status = std::system(cmd.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(Hardening, MeshToStandardOutputIsTheFileBytes) {
+  TempDir tmp;
+  const std::string sphere = "mc shape:sphere --res 16";
+  // Every streamable format: `-o - --format F` gives exactly the bytes of `-o file.F`, and the
+  // summary goes to stderr.
+  for (const std::string f : {"ply", "obj", "off", "stl", "glb"}) {
+    const std::string file = tmp.file("s." + f);
+    ASSERT_EQ(run_cli(sphere + " --quiet -o " + file).exit_code, 0);
+    const auto r = run_cli(sphere + " -o - --format " + f);
+    EXPECT_EQ(r.exit_code, 0) << f << ": " << r.err;
+    EXPECT_EQ(r.out, read_bytes(file)) << f;
+    EXPECT_NE(r.err.find("mc: "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("wrote standard output"), std::string::npos) << r.err;
+  }
+  {
+    const auto r = run_cli(sphere + " -o - --format ply --ascii --quiet");
+    ASSERT_EQ(run_cli(sphere + " --quiet --ascii -o " + tmp.file("a.ply")).exit_code, 0);
+    EXPECT_EQ(r.out, read_bytes(tmp.file("a.ply")));
+    EXPECT_TRUE(r.err.empty()) << r.err;
+  }
+  // Through a pipe, as a user would: `... -o - --format ply | head -c N` is a valid PLY, the
+  // same bytes as the file.
+  const std::string ply = read_bytes(tmp.file("s.ply"));
+  auto r = run_cli(sphere + " -o - --format ply 2>" + tmp.file("err") + " | head -c " +
+                   std::to_string(ply.size() + 100));
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_EQ(r.out, ply);
+  write_bytes(tmp.file("piped.ply"), r.out);
+  const Mesh m = read_mesh(tmp.file("piped.ply"));
+  EXPECT_EQ(m.num_triangles(), read_mesh(tmp.file("s.ply")).num_triangles());
+  EXPECT_GT(m.num_triangles(), 0u);
+  // extract and level: the same, with the progress and summary lines on stderr only.
+  ASSERT_EQ(run_cli("extract shape:torus --res 32 --levels 1 --quiet -o " + tmp.file("t.ply") +
+                    " --hierarchy " + tmp.file("t.amh")).exit_code, 0);
+  r = run_cli("extract shape:torus --res 32 --levels 1 -o - --format ply --report " +
+              tmp.file("t.json"));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, read_bytes(tmp.file("t.ply")));
+  EXPECT_NE(r.err.find("base mesh"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(tmp.file("t.json")));
+  ASSERT_EQ(run_cli("level " + tmp.file("t.amh") + " --all --quiet -o " + tmp.file("l.obj")).exit_code, 0);
+  r = run_cli("level " + tmp.file("t.amh") + " --all -o - --format obj");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, read_bytes(tmp.file("l.obj")));
+  EXPECT_NE(r.err.find("triangles"), std::string::npos) << r.err;
+}
+
+TEST(Hardening, MeshToStandardOutputErrors) {
+  TempDir tmp;
+  const std::string sphere = "mc shape:sphere --res 16";
+  // Command-line errors (1): no --format, an unknown one, --format disagreeing with a file's
+  // extension, "-" for an output other than the mesh of -o.
+  auto r = run_cli(sphere + " -o -");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("--format"), std::string::npos) << r.err;
+  EXPECT_TRUE(r.out.empty());
+  EXPECT_EQ(run_cli(sphere + " -o - --format xyz").exit_code, 1);
+  EXPECT_EQ(run_cli(sphere + " -o " + tmp.file("x.obj") + " --format ply").exit_code, 1);
+  EXPECT_FALSE(fs::exists(tmp.file("x.obj")));
+  EXPECT_EQ(run_cli("extract shape:torus --res 32 --base -").exit_code, 1);
+  EXPECT_EQ(run_cli("extract shape:torus --res 32 -o " + tmp.file("t.ply") + " --hierarchy -").exit_code, 1);
+  EXPECT_EQ(run_cli("extract shape:torus --res 32 --base " + tmp.file("b.ply") + " --format ply").exit_code, 1);
+  EXPECT_FALSE(fs::exists(tmp.file("b.ply")));
+  // Unsupported (3): glTF is two files; compression needs glb.
+  EXPECT_EQ(run_cli(sphere + " -o - --format gltf").exit_code, 3);
+  EXPECT_EQ(run_cli(sphere + " -o - --format ply --compress").exit_code, 3);
+  // Output errors (4): standard output closed or read-only (found before any work), a full
+  // device (found at the write). Nothing is written to standard output on any error.
+  const std::string cli = std::string("'") + ADAMESH_CLI + "' ";
+  const std::string err = tmp.file("err");
+  EXPECT_EQ(shell(cli + sphere + " -o - --format ply >&- 2>" + err), 4);
+  EXPECT_NE(read_bytes(err).find("not open for writing"), std::string::npos) << read_bytes(err);
+  EXPECT_EQ(shell(cli + sphere + " -o - --format ply 1</dev/null 2>" + err), 4);
+  EXPECT_EQ(lines(read_bytes(err)), 1u) << read_bytes(err);
+  EXPECT_EQ(shell(cli + sphere + " -o - --format ply >/dev/full 2>" + err), 4);
+  EXPECT_NE(read_bytes(err).find("standard output: No space left"), std::string::npos)
+      << read_bytes(err);
+  EXPECT_EQ(lines(read_bytes(err)), 1u) << read_bytes(err);
+  r = run_cli(sphere + " --iso 100 -o - --format ply");  // bad input (2): nothing on stdout
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_TRUE(r.out.empty());
+  r = run_cli("level " + tmp.file("missing.amh") + " --all -o - --format ply");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_TRUE(r.out.empty());
+  // Binary formats are not written to a terminal (`script` gives the command a pty).
+  if (shell("command -v script >/dev/null 2>&1") == 0) {
+    EXPECT_EQ(shell("script -qec \"" + cli + sphere + " -o - --format ply\" /dev/null >" + err +
+                    " 2>&1"), 4) << read_bytes(err);
+    EXPECT_NE(read_bytes(err).find("terminal"), std::string::npos) << read_bytes(err);
+  }
+}
+
+// ------------------------------------------------------------------ found by fuzzing (issue 17)
+
+TEST(Hardening, DicomPreambleWithACutShortMetaHeaderIsAnError) {
+  // fuzz_metaimage, fuzz_slc, fuzz_nrrd: any bytes with "DICM" at offset 128 went to GDCM, whose
+  // assertions (kept in Debian's build) aborted on a meta header cut short (gdcmReader.cxx:385)
+  // or an element running past the end (gdcmFileMetaInformation.cxx:436): exit 134 from `info`.
+  TempDir tmp;
+  const std::string prefixes[] = {std::string(128, '\0'),
+                                  "NRRD0004\n" + std::string(119, '\xc7'),
+                                  "NDims = 3\nElementDataFile = x\n" + std::string(98, '\xff'),
+                                  "Hiz" + std::string(125, '\xff')};
+  const std::string tails[] = {"", "\x0b\x0b", std::string("\x02\x00", 2),
+                               std::string("\x02\x00\x10\x00UI\x04\x00", 10),
+                               std::string("\x02\x00\x10\x00OB\x00\x00\xff\xff\xff\x7f", 12)};
+  int n = 0;
+  for (const std::string ext : {".mha", ".nrrd", ".slc", ".nii", ".vtk", ".vti", ".mrc", ".dcm", ""})
+    for (const auto& prefix : prefixes)
+      for (const auto& tail : tails) {
+        ASSERT_EQ(prefix.size(), 128u);
+        const std::string path = tmp.file("f" + std::to_string(n++) + ext);
+        write_bytes(path, prefix + "DICM" + tail);
+        EXPECT_THROW((void)read_volume(path), Error) << path;
+      }
+  // The command line: one error line, exit 2, for a named slice and for its folder.
+  fs::create_directory(tmp.file("series"));
+  write_bytes(tmp.file("series/s.dcm"), std::string(128, '\0') + "DICM" + std::string("\x02\x00", 2));
+  auto r = run_cli("info " + tmp.file("series/s.dcm"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("not a readable DICOM file"), std::string::npos) << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  r = run_cli("info " + tmp.file("series"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  // A .mha with the magic is read as MetaImage (its own error), not as DICOM.
+  write_bytes(tmp.file("m.mha"), prefixes[2] + "DICM\x0b\x0b");
+  r = run_cli("info " + tmp.file("m.mha"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(r.err.find("DICOM"), std::string::npos) << r.err;
 }
 
 }  // namespace

@@ -198,12 +198,4 @@ OptionSpec compress_option_spec() {
   return {"--compress", false, "glTF/GLB: EXT_meshopt_compression (lossless, needs a reader that knows it)"};
 }
 
-MeshWriteOptions mesh_output_options(const Args& args, const std::string& path) {
-  MeshWriteOptions wo;
-  wo.ascii = args.has("--ascii");
-  wo.compress = args.has("--compress");
-  mesh_format_for_writing(path, wo);
-  return wo;
-}
-
 }  // namespace adamesh::cli

@@ -39,6 +39,7 @@ class Args {
   void expect_positionals(std::size_t min, std::size_t max, const std::string& what) const;
   bool help_requested() const { return help_; }
   std::string usage(const std::string& synopsis) const;
+  const std::string& command() const { return command_; }
 
  private:
   std::string command_;
@@ -54,9 +55,5 @@ InputOptions input_options_from(const Args& args);
 
 /// --compress (glTF/GLB: EXT_meshopt_compression), for the commands that write meshes.
 OptionSpec compress_option_spec();
-/// Mesh writing options from --ascii / --compress, after checking that `path` names a mesh
-/// format the writers know (mesh_format_for_writing): commands call it for every mesh output
-/// before any computing, so a bad extension fails at once.
-MeshWriteOptions mesh_output_options(const Args& args, const std::string& path);
 
 }  // namespace adamesh::cli

@@ -35,7 +35,9 @@ std::vector<OptionSpec> extract_specs() {
       {"--attributes", false, "write per-vertex border/component attributes (PLY)"},
       {"--ascii", false, "ASCII PLY instead of binary"},
       {"--quiet", false, "no progress or summary output"},
-      {"-o", true, "write the refined mesh here (.ply .obj .off .stl .glb .gltf)"},
+      {"-o", true,
+       "write the refined mesh here (.ply .obj .off .stl .glb .gltf); - for standard output "
+       "(needs --format)"},
       {"--levels", true, "uniform refinement: K levels; the output is M_K"},
       {"--max-error", true,
        "adaptive: every triangle within E of the surface, world units (default: 0.25 voxel, "
@@ -45,7 +47,9 @@ std::vector<OptionSpec> extract_specs() {
       {"--labels", true,
        "label maps: 'all' meshes every label but 0 into -o DIR/ (DIR/label_L.EXT, a summary "
        "table and DIR/labels.json)"},
-      {"--format", true, "with --labels all: mesh format of the files (ply obj off stl; default ply)"},
+      {"--format", true,
+       "with -o -: the format of standard output (ply obj off stl glb); with --labels all: mesh "
+       "format of the files (ply obj off stl; default ply)"},
       {"--min-cavity", true,
        "topology control: fill cavities (enclosed pockets of outside) of fewer voxels than this"},
       {"--max-handle", true,
@@ -139,6 +143,9 @@ int extract_all_labels(const Args& args, const std::string& spec, const ExtractO
                         "(and DIR/labels.json); --base, --hierarchy and --report are per mesh");
   const auto out = args.get("-o");
   if (!out) fail(Status::usage, "adamesh extract: --labels all needs -o DIR/");
+  if (is_stdout(*out))
+    fail(Status::usage, "adamesh extract: --labels all writes one file per label into -o DIR/, "
+                        "not to standard output");
   const std::filesystem::path dir(*out);
   std::error_code ec;
   if (!std::filesystem::is_directory(dir, ec))
@@ -192,8 +199,12 @@ int extract_all_labels(const Args& args, const std::string& spec, const ExtractO
 int cmd_extract(const Argv& argv) {
   const Args args("extract", argv, extract_specs());
   if (args.help_requested()) {
-    std::cout << args.usage("INPUT [--iso V] [-o mesh.ply] [--levels K | --max-error E | "
-                            "--triangles N] [--hierarchy h.amh] [--base base.ply] [options]");
+    std::cout << args.usage("INPUT [--iso V] [-o mesh.ply|- [--format F]] [--levels K | "
+                            "--max-error E | --triangles N] [--hierarchy h.amh] [--base base.ply] "
+                            "[options]")
+              << "\n-o - --format ply writes the refined mesh to standard output (ply obj off stl "
+                 "glb; binary\nformats are refused on a terminal); progress and the summary go "
+                 "to stderr, so stdout holds\nthe mesh alone. The other outputs are files.\n";
     return 0;
   }
   args.expect_positionals(1, 1, "INPUT");
@@ -207,11 +218,16 @@ int cmd_extract(const Argv& argv) {
   // Every output is checked before any work (a missing --hierarchy folder used to be found
   // after minutes, with the other outputs already written).
   check_outputs("extract", args,
-                {{"-o", OutputKind::mesh}, {"--base", OutputKind::mesh},
+                {{"-o", OutputKind::mesh, true}, {"--base", OutputKind::mesh},
                  {"--hierarchy", OutputKind::hierarchy}, {"--report", OutputKind::report}});
+  if (args.has("--format") && !args.has("-o"))
+    fail(Status::usage, "adamesh extract: --format names the format of -o - (standard output) or "
+                        "of the files of --labels all; a file's format comes from its extension");
   const InputOptions input = input_options_from(args);
   for (const char* o : {"-o", "--base"})  // refuse unknown mesh formats before computing
-    if (auto path = args.get(o)) mesh_output_options(args, *path);
+    if (args.has(o)) mesh_output_options(args, o);
+  const bool streaming = is_stdout(args.get_or("-o", ""));
+  std::ostream& info = streaming ? std::cerr : std::cout;  // stdout: the mesh alone
 
   Progress progress(quiet);
   std::string stage;
@@ -238,9 +254,9 @@ int cmd_extract(const Argv& argv) {
       res.base.mesh.attributes.push_back(std::move(border));
       res.base.mesh.attributes.push_back(std::move(comp));
     }
-    write_mesh(res.base.mesh, *path, mesh_output_options(args, *path));
+    write_mesh(res.base.mesh, *path, mesh_output_options(args, "--base"));
   }
-  if (auto path = args.get("-o")) write_mesh(res.mesh, *path, mesh_output_options(args, *path));
+  if (auto path = args.get("-o")) write_mesh_output(res.mesh, *path, mesh_output_options(args, "-o"));
   if (auto path = args.get("--hierarchy")) write_hierarchy(*res.hierarchy, *path);
   progress.finish();
   rep.timings_s["write"] = clock.lap();
@@ -251,8 +267,8 @@ int cmd_extract(const Argv& argv) {
     write_file_atomically(*path, [&](std::ostream& o) { o << json; }, false);
   }
   if (!quiet) {
-    std::cout << base_summary(rep) << "\n";
-    if (rep.refined) std::cout << refine_summary(rep) << "\n";
+    info << base_summary(rep) << "\n";
+    if (rep.refined) info << refine_summary(rep) << "\n";
     for (const auto& w : rep.covering.warnings) std::cerr << "adamesh: warning: " << w << "\n";
   }
   return 0;

@@ -19,7 +19,12 @@ int cmd_level(const Argv& argv) {
                       {"--max-error", true, "the splits whose error bound exceeds E (world units)"},
                       {"--triangles", true, "the longest prefix of splits with at most N triangles"},
                       {"--all", false, "every split: the finest mesh"},
-                      {"-o", true, "output mesh (.ply .obj .off .stl .glb .gltf)"},
+                      {"-o", true,
+                       "output mesh (.ply .obj .off .stl .glb .gltf); - for standard output "
+                       "(needs --format)"},
+                      {"--format", true,
+                       "format of -o -: ply obj off stl glb (a file's format comes from its "
+                       "extension)"},
                       {"--partial", false, "accept a file cut short in its split list"},
                       {"--improve", false,
                        "shape improvement without the volume (flips within 0.25 voxel of the "
@@ -29,7 +34,10 @@ int cmd_level(const Argv& argv) {
                       compress_option_spec(),
                   });
   if (args.help_requested()) {
-    std::cout << args.usage("FILE.amh (--level K | --max-error E | --triangles N | --all) -o mesh.ply");
+    std::cout << args.usage("FILE.amh (--level K | --max-error E | --triangles N | --all) "
+                            "-o mesh.ply|- [--format F]")
+              << "\n-o - --format ply writes the mesh to standard output (ply obj off stl glb; "
+                 "binary formats\nare refused on a terminal); the summary then goes to stderr.\n";
     return 0;
   }
   args.expect_positionals(1, 1, "FILE.amh");
@@ -39,8 +47,9 @@ int cmd_level(const Argv& argv) {
     fail(Status::usage, "adamesh level: give exactly one of --level, --max-error, --triangles, --all");
   const auto out = args.get("-o");
   if (!out) fail(Status::usage, "adamesh level: -o FILE is required");
-  check_outputs("level", args, {{"-o", OutputKind::mesh}});
-  const MeshWriteOptions wo = mesh_output_options(args, *out);
+  check_outputs("level", args, {{"-o", OutputKind::mesh, true}});
+  const MeshWriteOptions wo = mesh_output_options(args, "-o");
+  std::ostream& info = is_stdout(*out) ? std::cerr : std::cout;  // stdout: the mesh alone
 
   const std::string path = args.positionals()[0];
   HierarchyReadOptions ro;
@@ -75,13 +84,13 @@ int cmd_level(const Argv& argv) {
     improve_mesh(cut.mesh, cut.vertex_border, nullptr, h.iso, io);
     what += ", improved";
   }
-  write_mesh(cut.mesh, *out, wo);
+  write_mesh_output(cut.mesh, *out, wo);
   if (!args.has("--quiet")) {
-    std::cout << path << " (" << what << "): " << cut.mesh.num_triangles() << " triangles, "
+    info << path << " (" << what << "): " << cut.mesh.num_triangles() << " triangles, "
               << cut.mesh.num_vertices() << " vertices, depth " << cut.max_level << ", "
               << cut.splits_applied << " of " << h.splits.size() << " splits";
-    if (cut.max_error > 0) std::cout << ", error bound " << cut.max_error;
-    std::cout << "\n";
+    if (cut.max_error > 0) info << ", error bound " << cut.max_error;
+    info << "\n";
   }
   return 0;
 }

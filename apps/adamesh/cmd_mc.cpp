@@ -1,4 +1,4 @@
-// `adamesh mc INPUT --iso V -o MESH [--threads N] [--quiet] [--ascii]`: reference marching cubes
+// `adamesh mc INPUT --iso V -o MESH|- [--format F] [--threads N] [--quiet] [--ascii]`: reference marching cubes
 // (Lorensen & Cline 1987) on the face-consistent surfel complex (asymptotic decider, Nielson &
 // Hamann 1991): watertight where closed, 2-manifold, consistently oriented (ALGORITHM.md 2.2).
 #include <tbb/task_arena.h>
@@ -36,18 +36,25 @@ std::string fixed(double v, int decimals) {
 int cmd_mc(const Argv& argv) {
   std::vector<OptionSpec> specs = input_option_specs();
   specs.push_back({"--iso", true, "iso-value (default: the input's own, e.g. 0 for shapes)"});
-  specs.push_back({"-o", true, "output mesh (.ply .obj .off .stl .glb .gltf), written atomically"});
+  specs.push_back({"-o", true,
+                   "output mesh (.ply .obj .off .stl .glb .gltf), written atomically; - for "
+                   "standard output (needs --format)"});
+  specs.push_back({"--format", true,
+                   "format of -o -: ply obj off stl glb (a file's format comes from its extension)"});
   specs.push_back({"--threads", true, "worker threads, 0 = all (default); output is identical"});
   specs.push_back({"--ascii", false, "PLY: write ASCII instead of binary"});
   specs.push_back({"--quiet", false, "print nothing on success"});
   specs.push_back(compress_option_spec());
   const Args args("mc", argv, specs);
   if (args.help_requested()) {
-    std::cout << args.usage("INPUT [--iso V] -o MESH [--threads N] [--ascii] [--quiet]")
+    std::cout << args.usage("INPUT [--iso V] -o MESH|- [--format F] [--threads N] [--ascii] [--quiet]")
               << "\nMarching cubes on the surfel complex: one vertex per sign-changing voxel edge, "
                  "ambiguous faces\nresolved by the asymptotic decider, each cell polygon "
                  "triangulated for the largest minimum\nangle. Samples equal to the iso-value "
-                 "count as inside. Prints triangles, vertices, time and\nvoxels per second.\n";
+                 "count as inside. Prints triangles, vertices, time and\nvoxels per second.\n"
+                 "\n-o - --format ply writes the mesh to standard output (ply obj off stl glb; "
+                 "binary formats\nare refused on a terminal); the summary then goes to stderr, "
+                 "so stdout holds the mesh alone.\n";
     return 0;
   }
   args.expect_positionals(1, 1, "INPUT");
@@ -56,8 +63,9 @@ int cmd_mc(const Argv& argv) {
   const std::int64_t threads = args.get_int("--threads").value_or(0);
   if (threads < 0 || threads > 4096)
     fail(Status::usage, "adamesh mc: --threads must be between 0 and 4096");
-  check_outputs("mc", args, {{"-o", OutputKind::mesh}});  // before any work
-  const MeshWriteOptions write_options = mesh_output_options(args, *out_path);
+  check_outputs("mc", args, {{"-o", OutputKind::mesh, true}});  // before any work
+  const MeshWriteOptions write_options = mesh_output_options(args, "-o");
+  std::ostream& info = is_stdout(*out_path) ? std::cerr : std::cout;  // stdout: the mesh alone
 
   const auto t_load = std::chrono::steady_clock::now();
   const Input in = load_input(args.positionals()[0], input_options_from(args));
@@ -84,7 +92,7 @@ int cmd_mc(const Argv& argv) {
   const double mesh_s = seconds_since(t_mesh);
 
   const auto t_write = std::chrono::steady_clock::now();
-  write_mesh(mesh, *out_path, write_options);
+  write_mesh_output(mesh, *out_path, write_options);
   const double write_s = seconds_since(t_write);
 
   if (!args.has("--quiet")) {
@@ -92,13 +100,13 @@ int cmd_mc(const Argv& argv) {
     const double voxels = double(std::max<std::int64_t>(d[0] - 1, 0)) *
                           double(std::max<std::int64_t>(d[1] - 1, 0)) *
                           double(std::max<std::int64_t>(d[2] - 1, 0));
-    std::cout << "mc: " << mesh.num_triangles() << " triangles, " << mesh.num_vertices()
+    info << "mc: " << mesh.num_triangles() << " triangles, " << mesh.num_vertices()
               << " vertices, " << surfels << " surfels at iso " << iso << "\n"
               << "time: " << fixed(mesh_s, 3) << " s extraction ("
               << fixed(voxels / std::max(mesh_s, 1e-9) / 1e6, 1) << " M voxels/s, " << d[0] << "x"
               << d[1] << "x" << d[2] << "), " << fixed(load_s, 3) << " s input, "
               << fixed(write_s, 3) << " s output\n"
-              << "wrote " << *out_path << "\n";
+              << "wrote " << (is_stdout(*out_path) ? "standard output" : *out_path) << "\n";
   }
   return 0;
 }

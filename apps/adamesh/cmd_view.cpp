@@ -15,6 +15,7 @@
 #include "adamesh/refine.h"
 #include "args.h"
 #include "commands.h"
+#include "outputs.h"
 #include "viewer_bundle.h"
 
 namespace adamesh::cli {
@@ -160,13 +161,9 @@ int cmd_view(const Argv& argv) {
   args.expect_positionals(1, 1, "FILE.amh|MESH");
   const auto out = args.get("-o");
   if (!out) fail(Status::usage, "adamesh view: -o FILE.html is required");
-  {
-    std::string ext = out->size() >= 5 ? out->substr(out->size() - 5) : "";
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (ext != ".html" && (ext.size() < 4 || ext.substr(1) != ".htm"))
-      fail(Status::unsupported,
-           *out + ": adamesh view writes an HTML page (use the extension .html)");
-  }
+  // As every command: the page's name and target are checked before any work (an .html/.htm
+  // extension; absent or a regular file, no symlink, in an existing writable folder).
+  check_outputs("view", args, {{"-o", OutputKind::page}});
   const std::string_view bundle = viewer_bundle();
   if (bundle.empty())
     fail(Status::unsupported,

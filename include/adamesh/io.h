@@ -3,6 +3,7 @@
 // written only).
 #pragma once
 
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,15 @@ MeshFormat mesh_format_for_writing(const std::string& path, const MeshWriteOptio
 /// with the extension `.bin`. Throws Error(output_failed, "<path>: ..."), or Error(unsupported)
 /// as mesh_format_for_writing() does.
 void write_mesh(const Mesh& mesh, const std::string& path, const MeshWriteOptions& options = {});
+
+/// Writes the mesh to a stream (standard output, a pipe, memory) in options.format, which must be
+/// named: ply, obj, off, stl or glb — the byte-identical content write_mesh() gives a file of that
+/// format. `name` is used in messages. Throws Error(usage) for MeshFormat::automatic,
+/// Error(unsupported) for gltf (two files) or compress with a format other than glb, and
+/// Error(output_failed, "<name>: ...") for an inconsistent mesh (nothing written) or a failing
+/// stream.
+void write_mesh_to_stream(const Mesh& mesh, std::ostream& os, const MeshWriteOptions& options,
+                          const std::string& name = "-");
 
 /// Reads PLY (ASCII/binary), OBJ, OFF or STL (binary/ASCII; corners with identical positions
 /// merged). Format from the extension, else from the first bytes. Polygons are fan-triangulated.

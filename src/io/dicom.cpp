@@ -16,12 +16,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <limits>
 #include <map>
 #include <sstream>
 #include <type_traits>
+#include <utility>
+#include <vector>
 
 #include "adamesh/error.h"
 #include "io/volume_readers.h"
@@ -79,14 +83,76 @@ bool has_dicom_magic(const std::string& path) {
   return ok && std::memcmp(magic, "DICM", 4) == 0;
 }
 
+/// Why GDCM must not be given a file with the Part 10 preamble, or "" when it may. Debian's GDCM
+/// keeps its assertions, and some malformed File Meta Information aborts the process: a meta
+/// header cut short (gdcmReader.cxx:385, `is.good()`), an element running past the end of the
+/// file (gdcmFileMetaInformation.cxx:436). Both were found by the volume fuzzers, which reach this
+/// reader through the DICM magic. So the group 0002 elements are walked here first: explicit VR
+/// little endian, each inside the file, and a data set must follow.
+std::string meta_header_problem(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return "cannot open the file";
+  std::vector<unsigned char> b(1 << 20);  // a meta header is a few hundred bytes
+  const std::size_t size = std::fread(b.data(), 1, b.size(), f);
+  std::fclose(f);
+  std::size_t pos = 132;  // preamble + "DICM"
+  int elements = 0;
+  for (;;) {
+    if (pos + 8 > size) {
+      if (size == b.size()) return "File Meta Information larger than 1 MiB";
+      return elements == 0 ? "no File Meta Information after the DICM preamble"
+                           : "no data set after the File Meta Information (file cut short)";
+    }
+    const unsigned group = b[pos] | b[pos + 1] << 8u;
+    const unsigned element = b[pos + 2] | b[pos + 3] << 8u;
+    if (group != 0x0002) {
+      if (elements == 0) return "no File Meta Information after the DICM preamble";
+      return "";
+    }
+    const char vr[3] = {static_cast<char>(b[pos + 4]), static_cast<char>(b[pos + 5]), '\0'};
+    if (!(vr[0] >= 'A' && vr[0] <= 'Z' && vr[1] >= 'A' && vr[1] <= 'Z'))
+      return "File Meta Information element " + std::to_string(elements) + " has no explicit VR";
+    static const char* const kLong[] = {"OB", "OD", "OF", "OL", "OV", "OW", "SQ",
+                                        "SV", "UC", "UN", "UR", "UT", "UV"};
+    bool long_form = false;
+    for (const char* l : kLong) long_form |= std::strcmp(vr, l) == 0;
+    std::uint64_t header = 8, length = b[pos + 6] | b[pos + 7] << 8u;
+    if (long_form) {
+      if (pos + 12 > size) return "File Meta Information cut short";
+      header = 12;
+      length = static_cast<std::uint64_t>(b[pos + 8]) | static_cast<std::uint64_t>(b[pos + 9]) << 8 |
+               static_cast<std::uint64_t>(b[pos + 10]) << 16 |
+               static_cast<std::uint64_t>(b[pos + 11]) << 24;
+    }
+    if (pos + header + length > size) {
+      char tag[16];
+      std::snprintf(tag, sizeof tag, "(0002,%04x)", element);
+      return std::string("File Meta Information element ") + tag + " runs past the end of the file";
+    }
+    pos += static_cast<std::size_t>(header + length);
+    ++elements;
+  }
+}
+
+/// GDCM prints its warnings on stderr; adamesh reports errors itself, on one line.
+void quiet_gdcm() {
+  gdcm::Trace::WarningOff();
+  gdcm::Trace::DebugOff();
+  gdcm::Trace::ErrorOff();
+}
+
 }  // namespace
 
 bool is_dicom_file(const std::string& path) { return has_dicom_magic(path); }
 
-Volume read_dicom_series(const std::vector<std::string>& files, const std::string& where,
+Volume read_dicom_series(const std::vector<std::string>& all_files, const std::string& where,
                          const std::string& series_uid) {
-  gdcm::Trace::WarningOff();  // GDCM would print its warnings on stderr; ours are errors
-  gdcm::Trace::DebugOff();
+  quiet_gdcm();
+  // Files with the Part 10 preamble and a malformed meta header are not DICOM images GDCM can
+  // take (it may abort on them): ignored, as any file that is not a DICOM image.
+  std::vector<std::string> files;
+  for (const std::string& f : all_files)
+    if (!has_dicom_magic(f) || meta_header_problem(f).empty()) files.push_back(f);
   gdcm::Scanner scanner;
   for (const gdcm::Tag& t : {kSeriesUid, kSeriesDescription, kModality, kPosition, kOrientation,
                              kPixelSpacing, kRows, kColumns, kFrames})
@@ -98,7 +164,7 @@ Volume read_dicom_series(const std::vector<std::string>& files, const std::strin
       series[trimmed(scanner.GetValue(f.c_str(), kSeriesUid))].push_back(f);
   if (series.empty())
     fail_input(where,
-               "no DICOM image files (" + std::to_string(files.size()) + " files looked at)");
+               "no DICOM image files (" + std::to_string(all_files.size()) + " files looked at)");
 
   std::string uid = series_uid;
   if (uid.empty()) {
@@ -229,7 +295,9 @@ Volume read_dicom_series(const std::vector<std::string>& files, const std::strin
       fail_input(slices[k].file, "pixel data shorter than the image size");
     rescale[k] = {img.GetSlope(), img.GetIntercept()};
     formats.push_back(pf);
-    const auto [slope, icpt] = rescale[k];
+    // Plain variables, not a structured binding: clang 14 (the fuzz preset) cannot capture
+    // those in the lambdas below.
+    const double slope = std::get<0>(rescale[k]), icpt = std::get<1>(rescale[k]);
     if (slope != std::floor(slope) || icpt != std::floor(icpt) || !(slope != 0)) integral = false;
     // Range of the rescaled values: the output type is the smallest that holds them exactly.
     const char* src = buffers[k].data();
@@ -297,7 +365,9 @@ Volume read_dicom_series(const std::vector<std::string>& files, const std::strin
   const std::size_t per_slice = static_cast<std::size_t>(size[0] * size[1]);
   for (std::size_t k = 0; k < nz; ++k) {
     const gdcm::PixelFormat& pf = formats[k];
-    const auto [slope, icpt] = rescale[k];
+    // Plain variables, not a structured binding: clang 14 (the fuzz preset) cannot capture
+    // those in the lambdas below.
+    const double slope = std::get<0>(rescale[k]), icpt = std::get<1>(rescale[k]);
     const char* src = buffers[k].data();
     dispatch_scalar(type, [&](auto out_tag) {
       using Out = decltype(out_tag);
@@ -358,6 +428,10 @@ Volume read_dicom(const std::string& path, const std::string& series_uid) {
     std::sort(files.begin(), files.end());
   } else {
     // One slice named: its series, read from the slice's directory.
+    quiet_gdcm();
+    if (has_dicom_magic(path))
+      if (const std::string problem = meta_header_problem(path); !problem.empty())
+        fail_input(path, "not a readable DICOM file: " + problem);
     gdcm::Scanner one;
     one.AddTag(kSeriesUid);
     if (!one.Scan({path}) || !one.IsKey(path.c_str())) fail_input(path, "not a DICOM image file");

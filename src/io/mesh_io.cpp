@@ -137,6 +137,27 @@ void write_mesh(const Mesh& mesh, const std::string& path, const MeshWriteOption
   });
 }
 
+void write_mesh_to_stream(const Mesh& mesh, std::ostream& os, const MeshWriteOptions& options,
+                          const std::string& name) {
+  if (options.format == MeshFormat::automatic)
+    fail(Status::usage, name + ": a stream has no extension: name the mesh format");
+  if (options.format == MeshFormat::gltf)
+    fail(Status::unsupported,
+         name + ": glTF (.gltf) is two files; a stream takes GLB (one binary file)");
+  (void)mesh_format_for_writing(name, options);  // --compress with a format that cannot hold it
+  check_mesh_for_writing(mesh, name, options);
+  switch (options.format) {
+    case MeshFormat::ply: fmt::write_ply(mesh, os, options); break;
+    case MeshFormat::obj: fmt::write_obj(mesh, os, options); break;
+    case MeshFormat::off: fmt::write_off(mesh, os, options); break;
+    case MeshFormat::stl: fmt::write_stl(mesh, os); break;
+    case MeshFormat::glb: fmt::write_glb(mesh, os, options); break;
+    case MeshFormat::gltf:
+    case MeshFormat::automatic: break;
+  }
+  if (!os) bad_output(name, "write error");
+}
+
 Mesh read_mesh(const std::string& path) {
   const std::string data = read_whole_file(path);
   MeshFormat format = format_from_extension(path);

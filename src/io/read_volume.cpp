@@ -110,11 +110,14 @@ Volume dispatch(Fmt f, const std::string& path, const RawOptions& raw) {
 }
 
 /// DICOM: a directory (unless named like another format: "x.nrrd/" is a mistake, reported as
-/// "is a directory"), a `.dcm` file, or a file with the Part 10 preamble.
+/// "is a directory"), a `.dcm` file, or a file with the Part 10 preamble whose extension names no
+/// other format (a `.mha` with "DICM" at byte 128 is read as MetaImage: found by fuzzing, where
+/// such files reached GDCM from every volume reader's target).
 bool is_dicom_input(const std::string& path, const std::string& ext) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) return from_extension(ext) == Fmt::unknown;
-  return ext == ".dcm" || detail::is_dicom_file(path);
+  if (ext == ".dcm") return true;
+  return from_extension(ext) == Fmt::unknown && detail::is_dicom_file(path);
 }
 
 }  // namespace
