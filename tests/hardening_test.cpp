@@ -576,7 +576,7 @@ TEST(Hardening, DicomPreambleWithACutShortMetaHeaderIsAnError) {
                                   "NDims = 3\nElementDataFile = x\n" + std::string(98, '\xff'),
                                   "Hiz" + std::string(125, '\xff')};
   const std::string tails[] = {"", "\x0b\x0b", std::string("\x02\x00", 2),
-                               std::string("\x02\x00\x10\x00UI\x04\x00", 10),
+                               std::string("\x02\x00\x10\x00UI\x04\x00", 8),
                                std::string("\x02\x00\x10\x00OB\x00\x00\xff\xff\xff\x7f", 12)};
   int n = 0;
   for (const std::string ext : {".mha", ".nrrd", ".slc", ".nii", ".vtk", ".vti", ".mrc", ".dcm", ""})
