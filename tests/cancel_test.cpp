@@ -17,6 +17,7 @@
 
 #include "adamesh/error.h"
 #include "adamesh/extract.h"
+#include "error_status.h"
 #include "testing.h"
 
 using namespace adamesh;
@@ -24,14 +25,6 @@ using namespace adamesh::testutil;
 
 namespace {
 
-Status status_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.status();
-  }
-  return Status::ok;
-}
 
 }  // namespace
 

@@ -13,6 +13,7 @@
 
 #include "adamesh/error.h"
 #include "adamesh/io.h"
+#include "error_status.h"
 #include "testing.h"
 
 using namespace adamesh;
@@ -22,14 +23,6 @@ namespace {
 
 std::string head_path() { return source_dir() + "/data/ct_headsq/quarter.nhdr"; }
 
-Status status_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.status();
-  }
-  return Status::ok;
-}
 
 }  // namespace
 

@@ -116,6 +116,24 @@ MeshFormat mesh_format_for_writing(const std::string& path, const MeshWriteOptio
   return format;
 }
 
+namespace {
+
+/// The one-stream formats (not gltf, which is two files).
+void write_single_stream(const Mesh& mesh, MeshFormat format, std::ostream& os,
+                         const MeshWriteOptions& options) {
+  switch (format) {
+    case MeshFormat::ply: fmt::write_ply(mesh, os, options); break;
+    case MeshFormat::obj: fmt::write_obj(mesh, os, options); break;
+    case MeshFormat::off: fmt::write_off(mesh, os, options); break;
+    case MeshFormat::stl: fmt::write_stl(mesh, os); break;
+    case MeshFormat::glb: fmt::write_glb(mesh, os, options); break;
+    case MeshFormat::gltf:
+    case MeshFormat::automatic: break;
+  }
+}
+
+}  // namespace
+
 void write_mesh(const Mesh& mesh, const std::string& path, const MeshWriteOptions& options) {
   const MeshFormat format = mesh_format_for_writing(path, options);
   check_mesh_for_writing(mesh, path, options);
@@ -124,17 +142,8 @@ void write_mesh(const Mesh& mesh, const std::string& path, const MeshWriteOption
     return;
   }
   // Text formats are written in binary mode too: "\n" line ends on every platform.
-  write_file_atomically(path, [&](std::ostream& os) {
-    switch (format) {
-      case MeshFormat::ply: fmt::write_ply(mesh, os, options); break;
-      case MeshFormat::obj: fmt::write_obj(mesh, os, options); break;
-      case MeshFormat::off: fmt::write_off(mesh, os, options); break;
-      case MeshFormat::stl: fmt::write_stl(mesh, os); break;
-      case MeshFormat::glb: fmt::write_glb(mesh, os, options); break;
-      case MeshFormat::gltf:
-      case MeshFormat::automatic: break;
-    }
-  });
+  write_file_atomically(path,
+                        [&](std::ostream& os) { write_single_stream(mesh, format, os, options); });
 }
 
 void write_mesh_to_stream(const Mesh& mesh, std::ostream& os, const MeshWriteOptions& options,
@@ -146,15 +155,7 @@ void write_mesh_to_stream(const Mesh& mesh, std::ostream& os, const MeshWriteOpt
          name + ": glTF (.gltf) is two files; a stream takes GLB (one binary file)");
   (void)mesh_format_for_writing(name, options);  // --compress with a format that cannot hold it
   check_mesh_for_writing(mesh, name, options);
-  switch (options.format) {
-    case MeshFormat::ply: fmt::write_ply(mesh, os, options); break;
-    case MeshFormat::obj: fmt::write_obj(mesh, os, options); break;
-    case MeshFormat::off: fmt::write_off(mesh, os, options); break;
-    case MeshFormat::stl: fmt::write_stl(mesh, os); break;
-    case MeshFormat::glb: fmt::write_glb(mesh, os, options); break;
-    case MeshFormat::gltf:
-    case MeshFormat::automatic: break;
-  }
+  write_single_stream(mesh, options.format, os, options);
   if (!os) bad_output(name, "write error");
 }
 
