@@ -183,6 +183,14 @@ struct IntersectionReport {
 IntersectionReport self_intersections(const Mesh& mesh, std::size_t keep_pairs = 0,
                                       const ExecutionContext& context = default_context());
 
+/// The intersecting pairs of self_intersections(mesh) that have at least one triangle t with
+/// involved[t] != 0, all of them, sorted; nullopt when not measured (the same test budget). Only
+/// the grid cells the involved triangles cover are searched: a recount after local moves costs
+/// O(triangles) for the boxes plus the tests near the moved triangles.
+std::optional<std::vector<std::pair<std::uint32_t, std::uint32_t>>> intersecting_pairs_involving(
+    const Mesh& mesh, const std::vector<std::uint8_t>& involved,
+    const ExecutionContext& context = default_context());
+
 // ---------------------------------------------------------------------- reports
 
 /// Everything `adamesh stats` prints.

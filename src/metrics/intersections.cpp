@@ -14,6 +14,8 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <optional>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -135,11 +137,16 @@ bool edge_pair_intersects(const P* s, const P* t) {
 
 }  // namespace
 
-IntersectionReport self_intersections(const Mesh& mesh, std::size_t keep_pairs,
-                                      const ExecutionContext& context) {
-  IntersectionReport rep;
+namespace {
+
+using PairList = std::vector<std::pair<std::uint32_t, std::uint32_t>>;
+
+/// The intersecting pairs (sorted), restricted to pairs with at least one triangle t where
+/// involved[t] != 0 when `involved` is given; nullopt when the pair tests exceed the budget.
+std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint8_t>* involved,
+                                   const ExecutionContext& context) {
   const std::size_t nt = mesh.num_triangles();
-  if (nt < 2) return rep;
+  if (nt < 2) return PairList{};
   auto tri = [&](std::size_t t) -> std::array<std::uint32_t, 3> {
     return {mesh.triangles[3 * t], mesh.triangles[3 * t + 1], mesh.triangles[3 * t + 2]};
   };
@@ -176,33 +183,70 @@ IntersectionReport self_intersections(const Mesh& mesh, std::size_t keep_pairs,
     const double c = (x - all.lo[k]) / (all.hi[k] - all.lo[k] + 1e-300) * static_cast<double>(dims[k]);
     return std::clamp<std::int64_t>(static_cast<std::int64_t>(c), 0, dims[k] - 1);
   };
-  // Duplicate triangles (same vertex set) are listed once: they are a topology finding, and a
-  // pile of copies would make the pair tests quadratic.
-  std::vector<std::uint8_t> listed(nt, 1);
-  {
-    std::vector<std::pair<std::array<std::uint32_t, 3>, std::uint32_t>> keys(nt);
-    for (std::size_t t = 0; t < nt; ++t) {
-      auto k = tri(t);
-      std::sort(k.begin(), k.end());
-      keys[t] = {k, static_cast<std::uint32_t>(t)};
-    }
-    std::sort(keys.begin(), keys.end());
-    for (std::size_t i = 1; i < nt; ++i)
-      if (keys[i].first == keys[i - 1].first) listed[keys[i].second] = 0;
-  }
-  // Cell lists (sorted by cell).
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> entries;
-  for (std::size_t t = 0; t < nt; ++t) {
-    if (!listed[t]) continue;
+  auto for_each_cell = [&](std::size_t t, auto&& f) {
     const auto& b = box[t];
     const std::int64_t x0 = cell_of(b[0], 0), x1 = cell_of(b[3], 0), y0 = cell_of(b[1], 1),
                        y1 = cell_of(b[4], 1), z0 = cell_of(b[2], 2), z1 = cell_of(b[5], 2);
     for (std::int64_t z = z0; z <= z1; ++z)
       for (std::int64_t y = y0; y <= y1; ++y)
         for (std::int64_t x = x0; x <= x1; ++x)
-          entries.push_back({static_cast<std::uint64_t>((z * dims[1] + y) * dims[0] + x),
-                             static_cast<std::uint32_t>(t)});
+          if (f(static_cast<std::uint64_t>((z * dims[1] + y) * dims[0] + x))) return;
+  };
+  // Restricted to `involved`: only the cells the involved triangles cover, and the triangles
+  // that reach into one of them (the candidates).
+  // Membership: a bitmap over the grid when it is small enough (up to 2^27 cells, 16 MB), else
+  // a sorted list.
+  std::vector<std::uint64_t> active, bits;
+  const std::uint64_t grid_cells = static_cast<std::uint64_t>(dims[0] * dims[1] * dims[2]);
+  const bool use_bits = grid_cells <= (std::uint64_t{1} << 27);
+  auto is_active = [&](std::uint64_t c) {
+    return use_bits ? (bits[c >> 6] >> (c & 63) & 1) != 0
+                    : std::binary_search(active.begin(), active.end(), c);
+  };
+  std::vector<std::uint32_t> candidates;
+  if (involved) {
+    if (use_bits) bits.assign((grid_cells + 63) / 64, 0);
+    for (std::size_t t = 0; t < nt; ++t)
+      if ((*involved)[t])
+        for_each_cell(t, [&](std::uint64_t c) {
+          if (use_bits) bits[c >> 6] |= std::uint64_t{1} << (c & 63);
+          else active.push_back(c);
+          return false;
+        });
+    std::sort(active.begin(), active.end());
+    active.erase(std::unique(active.begin(), active.end()), active.end());
+    for (std::size_t t = 0; t < nt; ++t) {
+      bool hit = (*involved)[t] != 0;
+      if (!hit) for_each_cell(t, [&](std::uint64_t c) { return hit = is_active(c); });
+      if (hit) candidates.push_back(static_cast<std::uint32_t>(t));
+    }
+  } else {
+    candidates.resize(nt);
+    for (std::size_t t = 0; t < nt; ++t) candidates[t] = static_cast<std::uint32_t>(t);
   }
+  // Duplicate triangles (same vertex set) are listed once: they are a topology finding, and a
+  // pile of copies would make the pair tests quadratic. Copies share their box, so a candidate's
+  // copies are candidates too.
+  std::vector<std::uint32_t> listed;
+  {
+    std::vector<std::pair<std::array<std::uint32_t, 3>, std::uint32_t>> keys(candidates.size());
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+      auto k = tri(candidates[i]);
+      std::sort(k.begin(), k.end());
+      keys[i] = {k, candidates[i]};
+    }
+    std::sort(keys.begin(), keys.end());
+    for (std::size_t i = 0; i < keys.size(); ++i)
+      if (i == 0 || keys[i].first != keys[i - 1].first) listed.push_back(keys[i].second);
+    std::sort(listed.begin(), listed.end());
+  }
+  // Cell lists (sorted by cell).
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> entries;
+  for (const std::uint32_t t : listed)
+    for_each_cell(t, [&](std::uint64_t c) {
+      if (!involved || is_active(c)) entries.push_back({c, t});
+      return false;
+    });
   std::sort(entries.begin(), entries.end());
   std::vector<std::size_t> starts;
   for (std::size_t i = 0; i < entries.size(); ++i)
@@ -217,10 +261,7 @@ IntersectionReport self_intersections(const Mesh& mesh, std::size_t keep_pairs,
     const std::size_t m = starts[c + 1] - starts[c];
     tests += m * (m - 1) / 2;
   }
-  if (tests > 64 * nt + 10'000'000) {
-    rep.pairs = -1;
-    return rep;
-  }
+  if (tests > 64 * nt + 10'000'000) return std::nullopt;
   std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> found(cells);
   detail::with_threads(context, [&] {
     detail::for_chunks(cells, [&](std::size_t c0, std::size_t c1) {
@@ -232,6 +273,7 @@ IntersectionReport self_intersections(const Mesh& mesh, std::size_t keep_pairs,
         for (std::size_t i = starts[c]; i < starts[c + 1]; ++i)
           for (std::size_t j = i + 1; j < starts[c + 1]; ++j) {
             const std::uint32_t a = entries[i].second, b = entries[j].second;
+            if (involved && !(*involved)[a] && !(*involved)[b]) continue;
             const auto &ba = box[a], &bb = box[b];
             float lo[3];
             bool overlap = true;
@@ -275,15 +317,35 @@ IntersectionReport self_intersections(const Mesh& mesh, std::size_t keep_pairs,
       }
     }, 64);
   });
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+  PairList pairs;
   for (auto& f : found) pairs.insert(pairs.end(), f.begin(), f.end());
   std::sort(pairs.begin(), pairs.end());
-  rep.pairs = static_cast<std::int64_t>(pairs.size());
+  return pairs;
+}
+
+}  // namespace
+
+IntersectionReport self_intersections(const Mesh& mesh, std::size_t keep_pairs,
+                                      const ExecutionContext& context) {
+  IntersectionReport rep;
+  std::optional<PairList> pairs = find_pairs(mesh, nullptr, context);
+  if (!pairs) {
+    rep.pairs = -1;
+    return rep;
+  }
+  rep.pairs = static_cast<std::int64_t>(pairs->size());
   if (keep_pairs > 0) {
-    pairs.resize(std::min(pairs.size(), keep_pairs));
-    rep.first_pairs = std::move(pairs);
+    pairs->resize(std::min(pairs->size(), keep_pairs));
+    rep.first_pairs = std::move(*pairs);
   }
   return rep;
+}
+
+std::optional<std::vector<std::pair<std::uint32_t, std::uint32_t>>> intersecting_pairs_involving(
+    const Mesh& mesh, const std::vector<std::uint8_t>& involved, const ExecutionContext& context) {
+  if (involved.size() != mesh.num_triangles())
+    throw std::invalid_argument("intersecting_pairs_involving: one flag per triangle");
+  return find_pairs(mesh, &involved, context);
 }
 
 }  // namespace adamesh

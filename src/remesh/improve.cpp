@@ -303,25 +303,19 @@ class Improver {
     return inside_box(q);
   }
 
-  /// Intersecting triangle pairs of the current mesh; with `pairs`, which ones (t_ indices).
-  std::size_t intersections(std::vector<std::pair<std::uint32_t, std::uint32_t>>* pairs) const {
+  /// The current mesh in float (alive triangles only; id[k] is the t_ index of its triangle k).
+  Mesh snapshot(std::vector<std::uint32_t>& id) const {
     Mesh m;
     m.positions.resize(3 * p_.size());
     for (std::size_t v = 0; v < p_.size(); ++v)
       for (int k = 0; k < 3; ++k) m.positions[3 * v + k] = static_cast<float>(p_[v][k]);
-    std::vector<std::uint32_t> id;
+    id.clear();
     for (std::size_t t = 0; t < t_.size(); ++t) {
       if (!tri_alive_[t]) continue;
       id.push_back(static_cast<std::uint32_t>(t));
       for (auto v : t_[t]) m.triangles.push_back(v);
     }
-    IntersectionReport r =
-        self_intersections(m, pairs ? m.num_triangles() * m.num_triangles() : 0, ctx_);
-    if (pairs) {
-      pairs->clear();
-      for (const auto& [a, b] : r.first_pairs) pairs->push_back({id[a], id[b]});
-    }
-    return static_cast<std::size_t>(std::max<std::int64_t>(r.pairs, 0));  // −1: not measured
+    return m;
   }
 
   /// Removes self-intersections where it can (issue 13): the vertices of intersecting triangles
@@ -330,22 +324,40 @@ class Improver {
   /// the surface are closer than the triangles are wide, no mesh on the surface avoids crossing),
   /// all at once, and a round is kept only when the count goes down; when it
   /// does not, the next round also moves their neighbours (up to two rings). Fixed and boundary
-  /// vertices stay, the box and an explicit error bound hold.
+  /// vertices stay, the box and an explicit error bound hold. The count is exact but
+  /// incremental (issue 14): after the first full count only pairs with a triangle around a
+  /// moved vertex are tested again (the connectivity does not change here).
   void untangle(ImproveStats& st) {
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs, next;
-    std::size_t cur = intersections(&pairs);
+    using PairList = std::vector<std::pair<std::uint32_t, std::uint32_t>>;
+    std::vector<std::uint32_t> id;  // mesh triangle -> t_ index
+    Mesh m = snapshot(id);
+    PairList pairs;  // in mesh triangle indices
+    {
+      IntersectionReport r = self_intersections(m, m.num_triangles() * m.num_triangles(), ctx_);
+      if (r.pairs < 0) {  // not measured (piles of triangles): nothing to do
+        st.intersections_before = st.intersections_after = 0;
+        return;
+      }
+      pairs = std::move(r.first_pairs);
+    }
+    std::size_t cur = pairs.size();
     st.intersections_before = cur;
     if (cur == 0) {
       st.intersections_after = 0;
       return;
     }
+    std::vector<std::uint8_t> moved(p_.size(), 0), involved(m.num_triangles(), 0);
+    auto set_position = [&](std::uint32_t v, const Vec3& q) {
+      p_[v] = q;
+      for (int k = 0; k < 3; ++k) m.positions[3 * v + k] = static_cast<float>(q[k]);
+    };
     int ring = 0;
     for (int round = 0; round < 16 && cur > 0; ++round) {
       build_incidence();
       std::vector<std::uint8_t> sel(p_.size(), 0);
       for (const auto& [a, b] : pairs)
         for (auto t : {a, b})
-          for (auto v : t_[t]) sel[v] = 1;
+          for (auto v : t_[id[t]]) sel[v] = 1;
       for (int k = 0; k < ring; ++k) {
         std::vector<std::uint8_t> grown = sel;
         for (std::uint32_t v = 0; v < p_.size(); ++v)
@@ -387,16 +399,32 @@ class Improver {
       std::vector<Vec3> old(moves.size());
       for (std::size_t i = 0; i < moves.size(); ++i) {
         old[i] = p_[moves[i].first];
-        p_[moves[i].first] = moves[i].second;
+        moved[moves[i].first] = 1;
+        set_position(moves[i].first, moves[i].second);
       }
-      const std::size_t now = intersections(&next);
-      if (now < cur) {
-        cur = now;
+      // Recount: the pairs away from the moved vertices stay as they were.
+      for (std::size_t k = 0; k < involved.size(); ++k) {
+        const std::uint32_t* c = &m.triangles[3 * k];
+        involved[k] = moved[c[0]] | moved[c[1]] | moved[c[2]];
+      }
+      for (const auto& mv : moves) moved[mv.first] = 0;
+      std::optional<PairList> near = intersecting_pairs_involving(m, involved, ctx_);
+      PairList next;
+      if (near) {
+        for (const auto& pr : pairs)
+          if (!involved[pr.first] && !involved[pr.second]) next.push_back(pr);
+        const std::size_t kept = next.size();
+        next.insert(next.end(), near->begin(), near->end());
+        std::inplace_merge(next.begin(), next.begin() + static_cast<std::ptrdiff_t>(kept),
+                           next.end());
+      }
+      if (near && next.size() < cur) {
+        cur = next.size();
         pairs.swap(next);
         st.untangle_moves += moves.size();
         ring = 0;
       } else {
-        for (std::size_t i = 0; i < moves.size(); ++i) p_[moves[i].first] = old[i];
+        for (std::size_t i = 0; i < moves.size(); ++i) set_position(moves[i].first, old[i]);
         if (++ring > 2) break;
       }
     }
