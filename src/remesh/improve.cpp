@@ -29,6 +29,10 @@
 #include <numbers>
 #include <unordered_set>
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
 namespace adamesh {
 
 namespace {
@@ -534,6 +538,36 @@ class Improver {
     }
   }
 
+  /// Would flipping the edge of t1 (side k1) and t2 (side k2) to xy pass every test but the
+  /// pass's bookkeeping (touched triangles, edges added earlier in the pass)? Reads the mesh only.
+  bool flip_ok(std::uint32_t t1, std::uint8_t k1, std::uint32_t t2, std::uint8_t k2,
+               const std::vector<std::uint64_t>& existing) const {
+    const std::uint32_t a = t_[t1][k1], b = t_[t1][(k1 + 1) % 3], x = t_[t1][(k1 + 2) % 3];
+    const std::uint32_t y = t_[t2][(k2 + 2) % 3];
+    if (x == y) return false;
+    const Vec3 &pa = p_[a], &pb = p_[b], &px = p_[x], &py = p_[y];
+    const double old_min = std::min(min_angle(pa, pb, px), min_angle(pb, pa, py));
+    if (old_min >= o_.target_angle_deg * kDeg) return false;
+    const double new_min = std::min(min_angle(pa, py, px), min_angle(pb, px, py));
+    if (new_min < old_min + kDeg) return false;
+    if (std::binary_search(existing.begin(), existing.end(), edge_key(x, y))) return false;
+    const Vec3 old_n = normalized(tri_normal(pa, pb, px)) + normalized(tri_normal(pb, pa, py));
+    const Vec3 n1 = normalized(tri_normal(pa, py, px)), n2 = normalized(tri_normal(pb, px, py));
+    if (dot(n1, old_n) <= 0 || dot(n2, old_n) <= 0 || dot(n1, n2) <= 0) return false;
+    if (!flip_within_deviation(pa, pb, px, py)) return false;
+    if (o_.max_error > 0 && field_) {
+      const double before = std::max(tri_error(pa, pb, px), tri_error(pb, pa, py));
+      const double after = std::max(tri_error(pa, py, px), tri_error(pb, px, py));
+      if (after > std::max(o_.max_error / kErrorSafety, before)) return false;
+    }
+    return true;
+  }
+
+  /// One pass of max-min-angle flips over the interior edges in key order; a triangle flips at
+  /// most once a pass. The tests (angles, normals, the surface distance of the new edge, the
+  /// error bound) run in parallel on the pass's starting mesh: an edge whose two triangles no
+  /// earlier flip touched reads exactly that mesh, so applying the results in order gives the
+  /// serial pass's flips for any thread count (issue 14).
   std::size_t flip_pass() {
     std::vector<std::uint64_t> existing;
     existing.reserve(3 * t_.size());
@@ -542,38 +576,40 @@ class Improver {
         for (int k = 0; k < 3; ++k) existing.push_back(edge_key(t_[t][k], t_[t][(k + 1) % 3]));
     std::sort(existing.begin(), existing.end());
     existing.erase(std::unique(existing.begin(), existing.end()), existing.end());
+    struct Edge {
+      std::uint32_t t1, t2;
+      std::uint8_t k1, k2;
+    };
+    std::vector<Edge> edges;
+    edges.reserve(3 * t_.size() / 2);
+    for_each_interior_edge([&](std::uint32_t t1, std::uint8_t k1, std::uint32_t t2, std::uint8_t k2) {
+      edges.push_back({t1, t2, k1, k2});
+    });
+    std::vector<std::uint8_t> ok(edges.size(), 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edges.size(), 512),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t i = r.begin(); i != r.end(); ++i)
+                          ok[i] = flip_ok(edges[i].t1, edges[i].k1, edges[i].t2, edges[i].k2,
+                                          existing);
+                      });
     std::unordered_set<std::uint64_t> added;
     std::vector<std::uint8_t> touched(t_.size(), 0);
-    const double target = o_.target_angle_deg * kDeg;
     std::size_t flips = 0;
-    for_each_interior_edge([&](std::uint32_t t1, std::uint8_t k1, std::uint32_t t2, std::uint8_t k2) {
-      if (touched[t1] || touched[t2]) return;
+    for (std::size_t i = 0; i < edges.size(); ++i) {
+      if (!ok[i]) continue;
+      const auto [t1, t2, k1, k2] = edges[i];
+      if (touched[t1] || touched[t2]) continue;
       const std::uint32_t a = t_[t1][k1], b = t_[t1][(k1 + 1) % 3], x = t_[t1][(k1 + 2) % 3];
       const std::uint32_t y = t_[t2][(k2 + 2) % 3];
-      if (x == y) return;
-      const Vec3 &pa = p_[a], &pb = p_[b], &px = p_[x], &py = p_[y];
-      const double old_min = std::min(min_angle(pa, pb, px), min_angle(pb, pa, py));
-      if (old_min >= target) return;
-      const double new_min = std::min(min_angle(pa, py, px), min_angle(pb, px, py));
-      if (new_min < old_min + kDeg) return;
       const std::uint64_t kxy = edge_key(x, y);
-      if (std::binary_search(existing.begin(), existing.end(), kxy) || added.count(kxy)) return;
-      const Vec3 old_n = normalized(tri_normal(pa, pb, px)) + normalized(tri_normal(pb, pa, py));
-      const Vec3 n1 = normalized(tri_normal(pa, py, px)), n2 = normalized(tri_normal(pb, px, py));
-      if (dot(n1, old_n) <= 0 || dot(n2, old_n) <= 0 || dot(n1, n2) <= 0) return;
-      if (!flip_within_deviation(pa, pb, px, py)) return;
-      if (o_.max_error > 0 && field_) {
-        const double before = std::max(tri_error(pa, pb, px), tri_error(pb, pa, py));
-        const double after = std::max(tri_error(pa, py, px), tri_error(pb, px, py));
-        if (after > std::max(o_.max_error / kErrorSafety, before)) return;
-      }
+      if (added.count(kxy)) continue;
       dirty_[a] = dirty_[b] = dirty_[x] = dirty_[y] = 1;
       t_[t1] = {a, y, x};
       t_[t2] = {b, x, y};
       touched[t1] = touched[t2] = 1;
       added.insert(kxy);
       ++flips;
-    });
+    }
     return flips;
   }
 
@@ -603,52 +639,89 @@ class Improver {
     return mn;
   }
 
+  /// Where a tangential move takes v (toward the mean of the equilateral apexes over its ring's
+  /// outer edges, re-projected, with step 1, 1/2, 1/4): false when v stays (fixed, on the
+  /// boundary, well shaped already, or no step improves its ring's smallest angle within the
+  /// bounds). Reads the mesh only.
+  bool plan_move(std::uint32_t v, Vec3& to) const {
+    if (fixed_[v] || boundary_[v] || inc_off_[v + 1] == inc_off_[v]) return false;
+    const double target = o_.target_angle_deg * kDeg;
+    bool flipped = false;
+    const Vec3 pv = p_[v];
+    const double old_min = ring_min_angle(v, pv, flipped);
+    if (old_min >= target) return false;
+    Vec3 n{}, goal{};
+    double lmin = std::numeric_limits<double>::max();
+    const double w = 1.0 / (inc_off_[v + 1] - inc_off_[v]);
+    for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
+      const Tri& t = t_[inc_[i]];
+      const int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+      const Vec3 &p = p_[t[(k + 1) % 3]], &q = p_[t[(k + 2) % 3]];
+      const Vec3 nt = tri_normal(pv, p, q);
+      n += nt;
+      const Vec3 e = q - p;
+      const double le = norm(e);
+      lmin = std::min({lmin, le, distance(pv, p)});
+      // The apex of the equilateral triangle on pq, on v's side, in the triangle's plane
+      // (counter-clockwise p, q, apex: the in-plane normal of pq pointing left).
+      const Vec3 side = normalized(cross(normalized(nt), e));
+      goal += w * (0.5 * (p + q) + (std::sqrt(3.0) / 2) * le * (norm2(side) > 0 ? side : Vec3{}));
+    }
+    n = normalized(n);
+    if (norm2(n) == 0) return false;
+    for (double lambda : {1.0, 0.5, 0.25}) {
+      Vec3 q = pv + lambda * (goal - pv);
+      q -= dot(q - pv, n) * n;
+      if (!project(q, 0.5 * lmin)) continue;
+      if (distance(q, pv) > 0.75 * lmin + 1e-12) continue;
+      const double new_min = ring_min_angle(v, q, flipped);
+      if (flipped || new_min < old_min + 0.1 * kDeg) continue;
+      if (!ring_error_ok(v, q)) continue;
+      to = q;
+      return true;
+    }
+    return false;
+  }
+
+  /// One pass of tangential moves over the vertices whose ring changed, in index order (a move
+  /// makes its ring dirty again: later vertices are looked at in this pass, earlier ones in the
+  /// next). The plans of the vertices dirty at the start are made in parallel on the starting
+  /// mesh; a vertex whose ring an earlier move of this pass changed is planned again, in order,
+  /// so the pass moves exactly what the serial pass would, for any thread count (issue 14).
   std::size_t move_pass() {
     build_incidence();
-    const double target = o_.target_angle_deg * kDeg;
-    std::size_t moves = 0;
-    for (std::uint32_t v = 0; v < p_.size(); ++v) {
+    const std::size_t nv = p_.size();
+    std::vector<std::uint32_t> todo;
+    for (std::uint32_t v = 0; v < nv; ++v)
+      if (dirty_[v]) todo.push_back(v);
+    struct Plan {
+      Vec3 q;
+      std::uint8_t move;
+    };
+    std::vector<Plan> plan(todo.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, todo.size(), 256),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t i = r.begin(); i != r.end(); ++i)
+                          plan[i].move = plan_move(todo[i], plan[i].q);
+                      });
+    std::vector<std::uint8_t> stale(nv, 0);  // a neighbour moved in this pass
+    std::size_t moves = 0, next = 0;
+    for (std::uint32_t v = 0; v < nv; ++v) {
       // Only vertices whose neighbourhood changed since they were last looked at.
+      const bool planned = next < todo.size() && todo[next] == v;
+      const std::size_t i = planned ? next++ : 0;
       if (!dirty_[v]) continue;
       tick_.tick();
       dirty_[v] = 0;
-      if (fixed_[v] || boundary_[v] || inc_off_[v + 1] == inc_off_[v]) continue;
-      bool flipped = false;
-      const Vec3 pv = p_[v];
-      const double old_min = ring_min_angle(v, pv, flipped);
-      if (old_min >= target) continue;
-      Vec3 n{}, goal{};
-      double lmin = std::numeric_limits<double>::max();
-      const double w = 1.0 / (inc_off_[v + 1] - inc_off_[v]);
-      for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
-        const Tri& t = t_[inc_[i]];
-        const int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
-        const Vec3 &p = p_[t[(k + 1) % 3]], &q = p_[t[(k + 2) % 3]];
-        const Vec3 nt = tri_normal(pv, p, q);
-        n += nt;
-        const Vec3 e = q - p;
-        const double le = norm(e);
-        lmin = std::min({lmin, le, distance(pv, p)});
-        // The apex of the equilateral triangle on pq, on v's side, in the triangle's plane
-        // (counter-clockwise p, q, apex: the in-plane normal of pq pointing left).
-        const Vec3 side = normalized(cross(normalized(nt), e));
-        goal += w * (0.5 * (p + q) + (std::sqrt(3.0) / 2) * le * (norm2(side) > 0 ? side : Vec3{}));
-      }
-      n = normalized(n);
-      if (norm2(n) == 0) continue;
-      for (double lambda : {1.0, 0.5, 0.25}) {
-        Vec3 q = pv + lambda * (goal - pv);
-        q -= dot(q - pv, n) * n;
-        if (!project(q, 0.5 * lmin)) continue;
-        if (distance(q, pv) > 0.75 * lmin + 1e-12) continue;
-        const double new_min = ring_min_angle(v, q, flipped);
-        if (flipped || new_min < old_min + 0.1 * kDeg) continue;
-        if (!ring_error_ok(v, q)) continue;
-        p_[v] = q;
-        mark_ring_dirty(v);
-        ++moves;
-        break;
-      }
+      Vec3 q;
+      const bool move = planned && !stale[v] ? plan[i].move != 0 : plan_move(v, q);
+      if (!move) continue;
+      if (planned && !stale[v]) q = plan[i].q;
+      p_[v] = q;
+      mark_ring_dirty(v);
+      for (std::uint32_t k = inc_off_[v]; k < inc_off_[v + 1]; ++k)
+        for (auto u : t_[inc_[k]]) stale[u] = 1;
+      ++moves;
     }
     return moves;
   }
@@ -707,23 +780,27 @@ class Improver {
     out.erase(std::unique(out.begin(), out.end()), out.end());
   }
 
-  /// Collapses edge ab (b into a, at their projected midpoint, or at a when a is fixed) when the
-  /// link condition holds, no triangle turns over, and the smallest angle around the merged
-  /// vertex is above `min_after` (radians) — or, with `must_improve`, above the smallest angle
-  /// before. Marks the touched vertices busy.
-  bool try_collapse(std::uint32_t a, std::uint32_t b, std::vector<std::uint8_t>& busy,
-                    bool must_improve, double min_after) {
-    if (busy[a] || busy[b] || boundary_[a] || boundary_[b] || (fixed_[a] && fixed_[b])) return false;
-    if (fixed_[b]) std::swap(a, b);  // keep the fixed end where it is
-    neighbours(a, na_);
-    neighbours(b, nb_);
-    common_.clear();
-    std::set_intersection(na_.begin(), na_.end(), nb_.begin(), nb_.end(), std::back_inserter(common_));
-    if (common_.size() != 2) return false;  // link condition
-    for (auto c : common_)
-      if (inc_off_[c + 1] - inc_off_[c] <= 3 || busy[c]) return false;
+  /// Neighbour lists for the collapse tests (one per thread when they run in parallel).
+  struct Rings {
+    std::vector<std::uint32_t> na, nb, common;
+  };
+
+  /// The tests of collapsing edge ab (b into a; a is not fixed unless b is, see try_collapse)
+  /// except the busy marks: the link condition, the merged point q (projected midpoint, or a
+  /// when a is fixed), no triangle turned over, the smallest angle, the error bound. Reads the
+  /// mesh only; leaves a's and b's neighbours and their common ones in `r`.
+  bool collapse_ok(std::uint32_t a, std::uint32_t b, bool must_improve, double min_after, Vec3& q,
+                   Rings& r) const {
+    neighbours(a, r.na);
+    neighbours(b, r.nb);
+    r.common.clear();
+    std::set_intersection(r.na.begin(), r.na.end(), r.nb.begin(), r.nb.end(),
+                          std::back_inserter(r.common));
+    if (r.common.size() != 2) return false;  // link condition
+    for (auto c : r.common)
+      if (inc_off_[c + 1] - inc_off_[c] <= 3) return false;
     const double len = distance(p_[a], p_[b]);
-    Vec3 q = fixed_[a] ? p_[a] : 0.5 * (p_[a] + p_[b]);
+    q = fixed_[a] ? p_[a] : 0.5 * (p_[a] + p_[b]);
     if (!fixed_[a] && !project(q, std::max(0.5 * len, o_.voxel))) return false;
     // The triangles around a and b, except the two on ab, with both ends at q.
     double old_min = std::numbers::pi, new_min = std::numbers::pi;
@@ -743,10 +820,23 @@ class Improver {
       }
     }
     if (must_improve ? new_min <= old_min : new_min < std::min(old_min, min_after)) return false;
-    if (!ring_error_ok(a, q) || !ring_error_ok(b, q)) return false;
+    return ring_error_ok(a, q) && ring_error_ok(b, q);
+  }
+
+  /// Which end of ab is kept: a, unless only b is fixed. False when the edge may not collapse
+  /// whatever the tests say (a boundary end, both ends fixed).
+  bool collapse_ends(std::uint32_t& a, std::uint32_t& b) const {
+    if (boundary_[a] || boundary_[b] || (fixed_[a] && fixed_[b])) return false;
+    if (fixed_[b]) std::swap(a, b);  // keep the fixed end where it is
+    return true;
+  }
+
+  /// Collapses b into a at q (collapse_ok passed) and marks the touched vertices busy.
+  void commit_collapse(std::uint32_t a, std::uint32_t b, const Vec3& q, const Rings& r,
+                       std::vector<std::uint8_t>& busy) {
     p_[a] = q;
-    for (auto v : na_) dirty_[v] = 1;
-    for (auto v : nb_) dirty_[v] = 1;
+    for (auto v : r.na) dirty_[v] = 1;
+    for (auto v : r.nb) dirty_[v] = 1;
     dirty_[a] = 1;
     for (std::uint32_t i = inc_off_[b]; i < inc_off_[b + 1]; ++i) {
       Tri& u = t_[inc_[i]];
@@ -757,9 +847,23 @@ class Improver {
       for (auto& w : u)
         if (w == b) w = a;
     }
-    for (auto v : na_) busy[v] = 1;
-    for (auto v : nb_) busy[v] = 1;
+    for (auto v : r.na) busy[v] = 1;
+    for (auto v : r.nb) busy[v] = 1;
     busy[a] = busy[b] = 1;
+  }
+
+  /// Collapses edge ab (b into a, at their projected midpoint, or at a when a is fixed) when the
+  /// link condition holds, no triangle turns over, and the smallest angle around the merged
+  /// vertex is above `min_after` (radians) — or, with `must_improve`, above the smallest angle
+  /// before. Nothing within the rings of busy vertices; marks the touched vertices busy.
+  bool try_collapse(std::uint32_t a, std::uint32_t b, std::vector<std::uint8_t>& busy,
+                    bool must_improve, double min_after) {
+    if (busy[a] || busy[b] || !collapse_ends(a, b)) return false;
+    Vec3 q;
+    if (!collapse_ok(a, b, must_improve, min_after, q, rings_)) return false;
+    for (auto c : rings_.common)
+      if (busy[c]) return false;
+    commit_collapse(a, b, q, rings_, busy);
     return true;
   }
 
@@ -812,14 +916,47 @@ class Improver {
         edges.push_back({distance(p_[a], p_[b]), (std::uint64_t{a} << 32) | b});
       });
       std::sort(edges.begin(), edges.end());
+      // The collapse tests run in parallel on blocks of edges, on the pass's starting mesh, and
+      // the collapses are applied in order: a collapse marks its rings busy, so an edge with no
+      // busy end or common neighbour reads exactly the mesh the serial pass would (issue 14).
       std::vector<std::uint8_t> busy(p_.size(), 0);
       std::size_t done = 0;
-      for (const auto& [len, key] : edges) {
-        if (done == need) break;
-        tick_.tick();
-        done += try_collapse(static_cast<std::uint32_t>(key >> 32),
-                             static_cast<std::uint32_t>(key & 0xffffffffu), busy, false,
-                             kFloors[floor] * kDeg);
+      struct Plan {
+        std::uint32_t a, b;
+        std::uint8_t ok;
+        Vec3 q;
+      };
+      constexpr std::size_t kBlock = 256;
+      std::vector<Plan> plans(kBlock);
+      tbb::enumerable_thread_specific<Rings> rings;
+      Rings mine;
+      for (std::size_t e0 = 0; e0 < edges.size() && done < need; e0 += kBlock) {
+        const std::size_t e1 = std::min(edges.size(), e0 + kBlock);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(e0, e1, 16),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                            Rings& local = rings.local();
+                            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                              Plan& pl = plans[i - e0];
+                              pl.a = static_cast<std::uint32_t>(edges[i].second >> 32);
+                              pl.b = static_cast<std::uint32_t>(edges[i].second & 0xffffffffu);
+                              pl.ok = !busy[pl.a] && !busy[pl.b] && collapse_ends(pl.a, pl.b) &&
+                                      collapse_ok(pl.a, pl.b, false, kFloors[floor] * kDeg, pl.q,
+                                                  local);
+                            }
+                          });
+        for (std::size_t i = e0; i < e1 && done < need; ++i) {
+          tick_.tick();
+          const Plan& pl = plans[i - e0];
+          if (!pl.ok || busy[pl.a] || busy[pl.b]) continue;
+          neighbours(pl.a, mine.na);
+          neighbours(pl.b, mine.nb);
+          bool free = true;
+          for (auto c : mine.na)
+            if (busy[c] && std::binary_search(mine.nb.begin(), mine.nb.end(), c)) free = false;
+          if (!free) continue;
+          commit_collapse(pl.a, pl.b, pl.q, mine, busy);
+          ++done;
+        }
       }
       collapses += done;
       if (done == 0 && ++floor == std::size(kFloors)) break;
@@ -829,7 +966,8 @@ class Improver {
   }
 
  private:
-  std::vector<std::uint32_t> na_, nb_, common_;
+  std::vector<std::uint32_t> na_;
+  Rings rings_;
 
 };
 
