@@ -464,7 +464,7 @@ Blocks match_blocks(const std::vector<Vec3>& pos,
   // triangles a global search then finds the long paths, so the good blocks still form a
   // maximum matching; above it the good blocks keep the local (maximal) result.
   for (const bool good_only : {true, false}) {
-    for (const int radius : {3, 8, 24}) {
+    for (const int radius : {3, 8, 24, 64, 160}) {
       if (unmatched() == 0) break;
       const std::size_t found = augment_locally(dual, good_only, radius, mate, ticker);
       out.augmentations += found;
