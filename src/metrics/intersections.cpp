@@ -20,6 +20,7 @@
 #include <vector>
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "adamesh/metrics.h"
 #include "metrics/parallel.h"
@@ -235,7 +236,7 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
       std::sort(k.begin(), k.end());
       keys[i] = {k, candidates[i]};
     }
-    std::sort(keys.begin(), keys.end());
+    tbb::parallel_sort(keys.begin(), keys.end());  // distinct (index): a total order
     for (std::size_t i = 0; i < keys.size(); ++i)
       if (i == 0 || keys[i].first != keys[i - 1].first) listed.push_back(keys[i].second);
     std::sort(listed.begin(), listed.end());
@@ -247,7 +248,7 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
       if (!involved || is_active(c)) entries.push_back({c, t});
       return false;
     });
-  std::sort(entries.begin(), entries.end());
+  tbb::parallel_sort(entries.begin(), entries.end());
   std::vector<std::size_t> starts;
   for (std::size_t i = 0; i < entries.size(); ++i)
     if (i == 0 || entries[i].first != entries[i - 1].first) starts.push_back(i);
@@ -319,7 +320,7 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
   });
   PairList pairs;
   for (auto& f : found) pairs.insert(pairs.end(), f.begin(), f.end());
-  std::sort(pairs.begin(), pairs.end());
+  tbb::parallel_sort(pairs.begin(), pairs.end());
   return pairs;
 }
 

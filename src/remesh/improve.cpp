@@ -32,6 +32,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 namespace adamesh {
 
@@ -52,11 +53,13 @@ double angle_at(const Vec3& a, const Vec3& b, const Vec3& c) {
   return std::atan2(norm(cross(u, v)), dot(u, v));
 }
 
-/// Smallest interior angle (radians) of triangle abc; 0 for a degenerate one.
+/// Smallest interior angle (radians) of triangle abc; 0 for a degenerate one. It is the angle
+/// opposite the shortest edge: one atan2 (the angle tests are a tenth of the improvement's time).
 double min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
-  const double x = angle_at(a, b, c), y = angle_at(b, c, a);
-  const double z = std::numbers::pi - x - y;
-  return std::max(0.0, std::min({x, y, z}));
+  const double ab = norm2(b - a), bc = norm2(c - b), ca = norm2(a - c);
+  if (bc <= ab && bc <= ca) return angle_at(a, b, c);
+  if (ca <= ab) return angle_at(b, c, a);
+  return angle_at(c, a, b);
 }
 
 Vec3 tri_normal(const Vec3& a, const Vec3& b, const Vec3& c) { return cross(b - a, c - a); }
@@ -523,8 +526,10 @@ class Improver {
       if (tri_alive_[t])
         for (std::uint8_t k = 0; k < 3; ++k)
           sides.push_back({edge_key(t_[t][k], t_[t][(k + 1) % 3]), static_cast<std::uint32_t>(t), k});
-    std::sort(sides.begin(), sides.end(), [](const Side& a, const Side& b) {
-      return a.key != b.key ? a.key < b.key : a.t < b.t;
+    // Parallel sort: the order is total (key, triangle, side), so it is the same for any
+    // thread count.
+    tbb::parallel_sort(sides.begin(), sides.end(), [](const Side& a, const Side& b) {
+      return a.key != b.key ? a.key < b.key : a.t != b.t ? a.t < b.t : a.k < b.k;
     });
     for (std::size_t i = 0; i + 1 < sides.size(); ++i) {
       if (sides[i].key != sides[i + 1].key) continue;
@@ -574,7 +579,7 @@ class Improver {
     for (std::size_t t = 0; t < t_.size(); ++t)
       if (tri_alive_[t])
         for (int k = 0; k < 3; ++k) existing.push_back(edge_key(t_[t][k], t_[t][(k + 1) % 3]));
-    std::sort(existing.begin(), existing.end());
+    tbb::parallel_sort(existing.begin(), existing.end());
     existing.erase(std::unique(existing.begin(), existing.end()), existing.end());
     struct Edge {
       std::uint32_t t1, t2;
@@ -915,7 +920,7 @@ class Improver {
         const std::uint32_t a = t_[t1][k1], b = t_[t1][(k1 + 1) % 3];
         edges.push_back({distance(p_[a], p_[b]), (std::uint64_t{a} << 32) | b});
       });
-      std::sort(edges.begin(), edges.end());
+      tbb::parallel_sort(edges.begin(), edges.end());  // distinct keys: a total order
       // The collapse tests run in parallel on blocks of edges, on the pass's starting mesh, and
       // the collapses are applied in order: a collapse marks its rings busy, so an edge with no
       // busy end or common neighbour reads exactly the mesh the serial pass would (issue 14).
