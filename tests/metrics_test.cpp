@@ -591,6 +591,28 @@ TEST(SelfIntersections, CrossingTrianglesWithoutSharedVertices) {
   EXPECT_GT(self_intersections(merged(icosphere(2), icosphere(2, 1, {1, 0, 0}))).pairs, 10);
 }
 
+TEST(SelfIntersections, PairsInvolvingFlaggedTrianglesAreTheFullListsSubset) {
+  // The incremental recount of the untangling: exactly the pairs of the full count that have a
+  // flagged triangle, for sparse and dense flags, with a duplicate triangle in the mesh.
+  Mesh m = merged(icosphere(2), icosphere(2, 1, {1, 0, 0}));
+  m.triangles.insert(m.triangles.end(), m.triangles.begin(), m.triangles.begin() + 3);
+  const std::size_t nt = m.num_triangles();
+  const IntersectionReport all = self_intersections(m, nt * nt);
+  ASSERT_GT(all.pairs, 10);
+  for (const std::size_t every : {1, 3, 7, 50}) {
+    std::vector<std::uint8_t> flag(nt, 0);
+    for (std::size_t t = 0; t < nt; t += every) flag[t] = 1;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> want;
+    for (const auto& p : all.first_pairs)
+      if (flag[p.first] || flag[p.second]) want.push_back(p);
+    const auto got = intersecting_pairs_involving(m, flag);
+    ASSERT_TRUE(got.has_value());
+    EXPECT_EQ(*got, want) << every;
+  }
+  EXPECT_TRUE(intersecting_pairs_involving(m, std::vector<std::uint8_t>(nt, 0))->empty());
+  EXPECT_THROW(intersecting_pairs_involving(m, std::vector<std::uint8_t>(3, 1)), std::invalid_argument);
+}
+
 TEST(SelfIntersections, SharedVertexCountsOnlyContactsElsewhere) {
   // Fan of two triangles around vertex 0 that do not cross: none.
   const Mesh ok = from({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0.2}, {0, -1, 0.2}},
