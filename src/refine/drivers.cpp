@@ -117,19 +117,32 @@ class Refiner {
     std::priority_queue<Entry, std::vector<Entry>, decltype(cmp)> heap(cmp);
     for (std::uint32_t t = 0; t < forest_.num_base_triangles(); ++t)
       if (refinable(t) && wanted(err_[t])) heap.push({key(err_[t]), t});
-    while (!heap.empty()) {
-      const std::uint32_t t = heap.top().second;
-      heap.pop();
-      if (!forest_.is_leaf(t)) continue;
-      if (forest_.num_leaves() + added_by_split(t) > max_triangles) break;
+    // Batches of the worst leaves (issue 14): up to 1/64 of the leaves (at least one) are split
+    // in queue order, then their vertices are placed and their children evaluated together, in
+    // parallel; a child enters the queue after its batch. The batch size depends on the mesh
+    // only, so the result is the same for any thread count; the budget check is per split.
+    bool full = false;
+    while (!heap.empty() && !full) {
       const std::uint32_t first = num_splits();
-      split_block(t, false);
+      const std::size_t cap = std::max<std::size_t>(1, forest_.num_leaves() / kBudgetBatch);
+      std::size_t batch = 0;
+      while (!heap.empty() && batch < cap) {
+        const std::uint32_t t = heap.top().second;
+        heap.pop();
+        if (!forest_.is_leaf(t)) continue;
+        if (forest_.num_leaves() + added_by_split(t) > max_triangles) {
+          full = true;
+          break;
+        }
+        split_block(t, false);
+        ++batch;
+      }
       for (const std::uint32_t c : finish_batch(first))
         if (forest_.is_leaf(c) && refinable(c) && wanted(err_[c])) heap.push({key(err_[c]), c});
-      // One split with its forced splits, placed and evaluated: tens of microseconds.
+      // A split with its forced splits, placed and evaluated: tens of microseconds.
       tick_.tick_with(
           [&] { return static_cast<double>(forest_.num_leaves()) / static_cast<double>(max_triangles); },
-          64);
+          static_cast<std::uint32_t>(64 * std::max<std::size_t>(batch, 1)));
     }
   }
 
@@ -287,6 +300,8 @@ class Refiner {
 
   /// Vertex placements per parallel batch between two cancellation checks.
   static constexpr std::size_t kChunk = 2048;
+  /// The budget driver splits at most leaves / kBudgetBatch blocks per batch.
+  static constexpr std::size_t kBudgetBatch = 64;
 
   const Surface& surf_;
   const RefineOptions& opt_;
