@@ -463,15 +463,32 @@ class Improver {
       };
       std::vector<Cand> cands;
       for_each_interior_edge([&](std::uint32_t t1, std::uint8_t k1, std::uint32_t t2, std::uint8_t k2) {
-        const Vec3& a = p_[t_[t1][k1]];
-        const Vec3& b = p_[t_[t1][(k1 + 1) % 3]];
-        const double len = distance(a, b);
-        double d = 0;
-        if (field_) d = std::abs(signed_distance(*field_, iso_, 0.5 * (a + b), len));
-        cands.push_back({(d + 1e-3 * o_.voxel) * len * len, t1, t2, k1, k2});
+        cands.push_back({0.0, t1, t2, k1, k2});
       });
-      std::stable_sort(cands.begin(), cands.end(),
-                       [](const Cand& x, const Cand& y) { return x.key > y.key; });
+      // Keys in parallel (a distance estimate per edge), then a total order: key, then the edge
+      // walk's order (issue 14: the same order as the serial stable sort).
+      std::vector<std::uint32_t> order(cands.size());
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cands.size(), 1024),
+                        [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                            Cand& c = cands[i];
+                            const Vec3& a = p_[t_[c.t1][c.k1]];
+                            const Vec3& b = p_[t_[c.t1][(c.k1 + 1) % 3]];
+                            const double len = distance(a, b);
+                            double d = 0;
+                            if (field_) d = std::abs(signed_distance(*field_, iso_, 0.5 * (a + b), len));
+                            c.key = (d + 1e-3 * o_.voxel) * len * len;
+                            order[i] = static_cast<std::uint32_t>(i);
+                          }
+                        });
+      tbb::parallel_sort(order.begin(), order.end(), [&](std::uint32_t x, std::uint32_t y) {
+        return cands[x].key != cands[y].key ? cands[x].key > cands[y].key : x < y;
+      });
+      {
+        std::vector<Cand> sorted(cands.size());
+        for (std::size_t i = 0; i < order.size(); ++i) sorted[i] = cands[order[i]];
+        cands.swap(sorted);
+      }
       std::vector<std::uint8_t> touched(t_.size(), 0);
       std::size_t done = 0;
       for (const Cand& c : cands) {
