@@ -155,25 +155,43 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
     const Vec3 p = mesh.vertex(v);
     return P{p.x, p.y, p.z};
   };
-  // Boxes and the grid.
+  // Boxes and the grid (chunked: the extent sums in a fixed order for any thread count).
   std::vector<std::array<float, 6>> box(nt);
-  double extent = 0;
-  Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
-  for (std::size_t t = 0; t < nt; ++t) {
-    const auto v = tri(t);
-    Vec3 a = mesh.vertex(v[0]), b = a;
-    for (int i = 1; i < 3; ++i) {
-      const Vec3 p = mesh.vertex(v[i]);
-      for (int k = 0; k < 3; ++k) a[k] = std::min(a[k], p[k]), b[k] = std::max(b[k], p[k]);
-    }
-    for (int k = 0; k < 3; ++k) {
-      box[t][k] = static_cast<float>(a[k]);
-      box[t][k + 3] = static_cast<float>(b[k]);
-      extent += b[k] - a[k];
-      lo[k] = std::min(lo[k], a[k]);
-      hi[k] = std::max(hi[k], b[k]);
-    }
-  }
+  struct Extent {
+    double sum = 0;
+    Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+  };
+  const Extent ext = detail::with_threads(context, [&] {
+    return detail::chunked_reduce(
+        nt, Extent{},
+        [&](std::size_t t0, std::size_t t1) {
+          Extent e;
+          for (std::size_t t = t0; t < t1; ++t) {
+            const auto v = tri(t);
+            Vec3 a = mesh.vertex(v[0]), b = a;
+            for (int i = 1; i < 3; ++i) {
+              const Vec3 p = mesh.vertex(v[i]);
+              for (int k = 0; k < 3; ++k) a[k] = std::min(a[k], p[k]), b[k] = std::max(b[k], p[k]);
+            }
+            for (int k = 0; k < 3; ++k) {
+              box[t][k] = static_cast<float>(a[k]);
+              box[t][k + 3] = static_cast<float>(b[k]);
+              e.sum += b[k] - a[k];
+              e.lo[k] = std::min(e.lo[k], a[k]);
+              e.hi[k] = std::max(e.hi[k], b[k]);
+            }
+          }
+          return e;
+        },
+        [](Extent acc, const Extent& e) {
+          acc.sum += e.sum;
+          for (int k = 0; k < 3; ++k)
+            acc.lo[k] = std::min(acc.lo[k], e.lo[k]), acc.hi[k] = std::max(acc.hi[k], e.hi[k]);
+          return acc;
+        });
+  });
+  const double extent = ext.sum;
+  const Vec3 lo = ext.lo, hi = ext.hi;
   const Box all{lo, hi};
   const double cell_size = std::max(2 * extent / (3 * static_cast<double>(nt)), 1e-30);
   std::array<std::int64_t, 3> dims{};
@@ -216,11 +234,18 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
         });
     std::sort(active.begin(), active.end());
     active.erase(std::unique(active.begin(), active.end()), active.end());
-    for (std::size_t t = 0; t < nt; ++t) {
-      bool hit = (*involved)[t] != 0;
-      if (!hit) for_each_cell(t, [&](std::uint64_t c) { return hit = is_active(c); });
-      if (hit) candidates.push_back(static_cast<std::uint32_t>(t));
-    }
+    std::vector<std::uint8_t> hit(nt, 0);
+    detail::with_threads(context, [&] {
+      detail::for_chunks(nt, [&](std::size_t t0, std::size_t t1) {
+        for (std::size_t t = t0; t < t1; ++t) {
+          bool h = (*involved)[t] != 0;
+          if (!h) for_each_cell(t, [&](std::uint64_t c) { return h = is_active(c); });
+          hit[t] = h;
+        }
+      });
+    });
+    for (std::size_t t = 0; t < nt; ++t)
+      if (hit[t]) candidates.push_back(static_cast<std::uint32_t>(t));
   } else {
     candidates.resize(nt);
     for (std::size_t t = 0; t < nt; ++t) candidates[t] = static_cast<std::uint32_t>(t);
