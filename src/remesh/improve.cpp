@@ -33,6 +33,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
+#include <tbb/task_arena.h>
 
 namespace adamesh {
 
@@ -1012,15 +1013,29 @@ class Improver {
 
 }  // namespace
 
+namespace {
+
+/// f() with at most context.threads worker threads (the passes' parallel tests).
+template <class F>
+auto in_arena(const ExecutionContext& context, F&& f) {
+  if (context.threads <= 0) return f();
+  tbb::task_arena arena(context.threads);
+  return arena.execute(std::forward<F>(f));
+}
+
+}  // namespace
+
 ImproveStats improve_mesh(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
                           const ScalarField* field, double iso, const ImproveOptions& options,
                           std::vector<std::uint32_t>* vertex_map, const ExecutionContext& context) {
   if (mesh.num_triangles() == 0) return {};
-  Improver imp(mesh, fixed, field, iso, options, context, "improve");
-  const ImproveStats st = imp.run();
-  imp.write(mesh, st.collapses > 0, vertex_map);
-  mesh.normals.clear();
-  return st;
+  return in_arena(context, [&] {
+    Improver imp(mesh, fixed, field, iso, options, context, "improve");
+    const ImproveStats st = imp.run();
+    imp.write(mesh, st.collapses > 0, vertex_map);
+    mesh.normals.clear();
+    return st;
+  });
 }
 
 ImproveStats improve_base_mesh(BaseMesh& base, const ScalarField* field, double iso,
@@ -1029,14 +1044,15 @@ ImproveStats improve_base_mesh(BaseMesh& base, const ScalarField* field, double 
   std::vector<std::uint32_t> map;
   ImproveStats st;
   if (base.mesh.num_triangles() == 0) return st;
-  {
+  in_arena(context, [&] {
     Improver imp(base.mesh, base.border, field, iso, options, context, "improve M0");
     const std::size_t removed = decimate_to > 0 ? imp.decimate(decimate_to) : 0;
     st = imp.run();
     st.decimated = removed;
     imp.write(base.mesh, st.collapses + removed > 0, &map);
     base.mesh.normals.clear();
-  }
+    return 0;
+  });
   auto remap = [&](auto& per_vertex) {
     std::remove_reference_t<decltype(per_vertex)> out(base.mesh.num_vertices());
     for (std::size_t v = 0; v < map.size() && v < per_vertex.size(); ++v)
