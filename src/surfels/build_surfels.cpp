@@ -24,6 +24,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -35,6 +36,7 @@
 #include "adamesh/error.h"
 #include "adamesh/surfels.h"
 #include "surfels/cell_table.h"
+#include "surfels/polygon_triangulator.h"
 #include "surfels/sized.h"
 
 namespace adamesh {
@@ -87,7 +89,9 @@ class Extractor {
     for (std::int64_t k = z0; k < z1; ++k) {
       const bool top = k + 1 < nz_;
       if (top) classify(k + 1, s1.get());
-      if (write) plane_nodes(k, s0.get(), top ? s1.get() : nullptr, node_base[k], true, *ids, out);
+      if (write)
+        plane_nodes(k, s0.get(), top ? s1.get() : nullptr, node_base[k], *ids,
+                    out.node_pos.data() + 3 * node_base[k], out.node_key.data() + node_base[k]);
       else counts[k] = count_plane_nodes(s0.get(), top ? s1.get() : nullptr);
       std::swap(s0, s1);
     }
@@ -120,26 +124,51 @@ class Extractor {
     }
   }
 
-  /// Pass 3 over node planes [z0, z1): nodes of these planes, surfels of these layers.
+  /// Pass 3 over node planes [z0, z1): nodes of these planes, surfels of these layers, into the
+  /// complex `out`; or (`mesh` given) straight into the marching cubes mesh: vertex = node
+  /// position, each surfel's triangles where marching_cubes(complex) puts them.
   void fill(std::int64_t z0, std::int64_t z1, const std::vector<std::int64_t>& node_base,
             const std::vector<std::int64_t>& surfel_base,
-            const std::vector<std::int64_t>& entry_base, SurfelComplex& out) const {
+            const std::vector<std::int64_t>& entry_base, SurfelComplex* out, Mesh* mesh) const {
     std::unique_ptr<std::uint8_t[]> s0(new std::uint8_t[plane_]), s1(new std::uint8_t[plane_]),
         s2(new std::uint8_t[plane_]);
     std::unique_ptr<std::uint8_t[]> q0(new std::uint8_t[plane_]), q1(new std::uint8_t[plane_]);
     PlaneIds m0(plane_), m1(plane_);
+    // Mesh: the nodes of plane z1 belong to the next slab, but the triangles of layer z1 − 1
+    // need their positions: computed here too, into a local copy.
+    std::vector<float> top_plane;
+    if (mesh && z1 < nz_) top_plane.resize(3 * (node_base[z1 + 1] - node_base[z1]));
+    // Where plane k's node positions (and keys) go, or nullptr for a plane of the next slab.
+    auto targets = [&](std::int64_t k, PlaneIds& ids) {
+      ids.base = static_cast<std::uint32_t>(node_base[k]);
+      float* pos = nullptr;
+      std::uint64_t* keys = nullptr;
+      if (mesh) pos = k < z1 ? mesh->positions.data() + 3 * node_base[k] : top_plane.data();
+      else if (k < z1) {
+        pos = out->node_pos.data() + 3 * node_base[k];
+        keys = out->node_key.data() + node_base[k];
+      }
+      ids.pos = pos;
+      return std::pair{pos, keys};
+    };
     classify(z0, s0.get());
     quads(s0.get(), q0.get());
     if (z0 + 1 < nz_) classify(z0 + 1, s1.get());
-    plane_nodes(z0, s0.get(), z0 + 1 < nz_ ? s1.get() : nullptr, node_base[z0], true, m0, out);
+    {
+      const auto [pos, keys] = targets(z0, m0);
+      plane_nodes(z0, s0.get(), z0 + 1 < nz_ ? s1.get() : nullptr, node_base[z0], m0, pos, keys);
+    }
     for (std::int64_t k = z0; k < z1 && k + 1 < nz_; ++k) {
       // Invariant: s0/s1 = signs of planes k, k+1; q0 = quads of k; m0 = ids of plane k.
       const bool has2 = k + 2 < nz_;
       if (has2) classify(k + 2, s2.get());
       quads(s1.get(), q1.get());
-      plane_nodes(k + 1, s1.get(), has2 ? s2.get() : nullptr, node_base[k + 1], k + 1 < z1, m1,
-                  out);
-      layer_surfels(k, q0.get(), q1.get(), m0, m1, surfel_base[k], entry_base[k], out);
+      const auto [pos, keys] = targets(k + 1, m1);
+      plane_nodes(k + 1, s1.get(), has2 ? s2.get() : nullptr, node_base[k + 1], m1, pos, keys);
+      if (mesh)
+        layer_triangles(k, q0.get(), q1.get(), m0, m1, surfel_base[k], entry_base[k],
+                        mesh->triangles.data());
+      else layer_surfels(k, q0.get(), q1.get(), m0, m1, surfel_base[k], entry_base[k], *out);
       std::swap(s0, s1);
       std::swap(s1, s2);
       std::swap(q0, q1);
@@ -151,7 +180,8 @@ class Extractor {
   /// Node ids of one plane, compactly (5 bytes per point instead of 12): the id of the point's
   /// first node in key order and the mask of its sign-changing edges (bit = axis). The node on
   /// edge (p, axis) is first[p] + number of mask bits below `axis`. Entries are written only at
-  /// points with nodes, the only ones ever looked up.
+  /// points with nodes, the only ones ever looked up. `pos`: the plane's node positions (3 floats
+  /// per node from id `base` on), where the direct marching cubes reads them back.
   struct PlaneIds {
     explicit PlaneIds(std::int64_t n) : first(new std::uint32_t[n]), mask(new std::uint8_t[n]) {}
     std::unique_ptr<std::uint32_t[]> first;
@@ -161,6 +191,12 @@ class Extractor {
                                                    {0, 0, 0}, {0, 1, 1}, {0, 0, 1}, {0, 1, 2}};
       return first[p] + kRank[mask[p]][axis];
     }
+    Vec3 position(std::uint32_t id) const {
+      const float* q = pos + 3 * std::size_t{id - base};
+      return {q[0], q[1], q[2]};
+    }
+    const float* pos = nullptr;
+    std::uint32_t base = 0;
   };
 
   double value(std::int64_t lin) const { return sgn_ * (static_cast<double>(data_[lin]) - iso_); }
@@ -295,13 +331,15 @@ class Extractor {
     return bits;
   }
 
-  /// Ids of plane k's nodes in key order (j, i, axis) into `ids`; writes the nodes when `write`.
+  /// Ids of plane k's nodes in key order (j, i, axis) into `ids`; the positions of the nodes from
+  /// id `base` on into `pos` (3 floats each) unless it is null, their keys into `keys` unless
+  /// that is null.
   void plane_nodes(std::int64_t k, const std::uint8_t* s, const std::uint8_t* up, std::int64_t base,
-                   bool write, PlaneIds& ids, SurfelComplex& out) const {
+                   PlaneIds& ids, float* pos, std::uint64_t* keys) const {
     auto id = static_cast<std::uint32_t>(base);
     const std::int64_t plane_lin = k * plane_;
     auto emit = [&](std::int64_t p, std::int64_t i, std::int64_t j, int axis) {
-      if (write) {
+      if (pos) {
         const std::int64_t lin0 = plane_lin + p;
         const std::int64_t lin1 = lin0 + (axis == 0 ? 1 : (axis == 1 ? nx_ : plane_));
         const double v0 = value(lin0), v1 = value(lin1);
@@ -311,10 +349,12 @@ class Extractor {
         Vec3 ijk{static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)};
         ijk[axis] += t;
         const Vec3 w = origin_ + to_world_ * ijk;  // == Grid::to_world(ijk)
-        out.node_key[id] = 3 * static_cast<std::uint64_t>(lin0) + static_cast<std::uint64_t>(axis);
-        out.node_pos[3 * std::size_t{id}] = static_cast<float>(w.x);
-        out.node_pos[3 * std::size_t{id} + 1] = static_cast<float>(w.y);
-        out.node_pos[3 * std::size_t{id} + 2] = static_cast<float>(w.z);
+        const std::size_t local = id - static_cast<std::uint32_t>(base);
+        if (keys)
+          keys[local] = 3 * static_cast<std::uint64_t>(lin0) + static_cast<std::uint64_t>(axis);
+        pos[3 * local] = static_cast<float>(w.x);
+        pos[3 * local + 1] = static_cast<float>(w.y);
+        pos[3 * local + 2] = static_cast<float>(w.z);
       }
       ++id;
     };
@@ -378,6 +418,45 @@ class Extractor {
     });
   }
 
+  /// The direct marching cubes' layer_surfels: the triangles of layer k's surfels, at the place
+  /// and in the order marching_cubes(complex) writes them (surfel s with its first polygon entry
+  /// e: from triangle e − 2s on), triangulated by the same code from the same node positions.
+  void layer_triangles(std::int64_t k, const std::uint8_t* q0, const std::uint8_t* q1,
+                       const PlaneIds& m0, const PlaneIds& m1, std::int64_t surfel_base,
+                       std::int64_t entry_base, std::uint32_t* triangles) const {
+    std::int64_t tri = entry_base - 2 * surfel_base;  // first triangle of the layer
+    const PlaneIds* maps[2] = {&m0, &m1};
+    detail::PolygonTriangulator triangulator;
+    std::array<Vec3, detail::kMaxPolygonNodes> p;
+    std::array<int, detail::kMaxPolygonNodes> local_edge;
+    std::array<std::uint32_t, detail::kMaxPolygonNodes> ids;
+    for_active_voxels(q0, q1, [&](std::int64_t i, std::int64_t j, int c) {
+      const std::int64_t point = j * nx_ + i;
+      const CellConfig& cfg = table_.config(c, decisions(c, i, j, k), mirrored_);
+      int idx = 0;
+      for (int cy = 0; cy < cfg.num_cycles; ++cy) {
+        const int len = cfg.cycle_len[cy];
+        std::uint32_t* t = triangles + 3 * tri;
+        tri += len - 2;
+        if (len == 3) {
+          for (int n = 0; n < 3; ++n, ++idx) {
+            const int e = cfg.edge[idx];
+            t[n] = maps[edge_plane_[e]]->id(point + edge_offset_[e], edge_axis_[e]);
+          }
+          continue;
+        }
+        for (int n = 0; n < len; ++n, ++idx) {
+          const int e = cfg.edge[idx];
+          const PlaneIds& m = *maps[edge_plane_[e]];
+          ids[n] = m.id(point + edge_offset_[e], edge_axis_[e]);
+          p[n] = m.position(ids[n]);
+          local_edge[n] = e;
+        }
+        triangulator.run(len, p, local_edge, t, ids.data());
+      }
+    });
+  }
+
   const T* data_;
   std::int64_t nx_, ny_, nz_, plane_;
   double iso_, sgn_;
@@ -409,11 +488,14 @@ void for_each_slab(std::int64_t nz, int threads, Fn&& fn) {
   });
 }
 
-template <class T>
-void extract(const Volume& volume, SurfelComplex& out, int threads) {
-  const Extractor<T> ex(volume, out.iso, out.inside_sign);
-  const std::int64_t nz = ex.nz();
+/// Passes 1 and 2: the first node, surfel and polygon entry of every plane / layer (size nz + 1).
+struct Layout {
+  std::vector<std::int64_t> node_base, surfel_base, entry_base;
+};
 
+template <class T>
+Layout layout(const Extractor<T>& ex, int threads) {
+  const std::int64_t nz = ex.nz();
   Counts counts;
   counts.plane_nodes.assign(nz, 0);
   counts.layer_surfels.assign(nz, 0);
@@ -422,17 +504,29 @@ void extract(const Volume& volume, SurfelComplex& out, int threads) {
     ex.count(z0, z1, counts);
   });
 
-  std::vector<std::int64_t> node_base(nz + 1), surfel_base(nz + 1), entry_base(nz + 1);
+  Layout l;
+  l.node_base.assign(nz + 1, 0);
+  l.surfel_base.assign(nz + 1, 0);
+  l.entry_base.assign(nz + 1, 0);
   for (std::int64_t k = 0; k < nz; ++k) {
-    node_base[k + 1] = node_base[k] + counts.plane_nodes[k];
-    surfel_base[k + 1] = surfel_base[k] + counts.layer_surfels[k];
-    entry_base[k + 1] = entry_base[k] + counts.layer_entries[k];
+    l.node_base[k + 1] = l.node_base[k] + counts.plane_nodes[k];
+    l.surfel_base[k + 1] = l.surfel_base[k] + counts.layer_surfels[k];
+    l.entry_base[k + 1] = l.entry_base[k] + counts.layer_entries[k];
   }
-  const std::int64_t num_nodes = node_base[nz], num_surfels = surfel_base[nz],
-                     num_entries = entry_base[nz];
-  check_id_range(num_nodes, std::numeric_limits<std::int32_t>::max(), "nodes");
-  check_id_range(num_surfels, std::numeric_limits<std::int32_t>::max() - 1, "surfels");
-  check_id_range(num_entries, std::numeric_limits<std::uint32_t>::max() - 1, "polygon entries");
+  check_id_range(l.node_base[nz], std::numeric_limits<std::int32_t>::max(), "nodes");
+  check_id_range(l.surfel_base[nz], std::numeric_limits<std::int32_t>::max() - 1, "surfels");
+  check_id_range(l.entry_base[nz], std::numeric_limits<std::uint32_t>::max() - 1,
+                 "polygon entries");
+  return l;
+}
+
+template <class T>
+void extract(const Volume& volume, SurfelComplex& out, int threads) {
+  const Extractor<T> ex(volume, out.iso, out.inside_sign);
+  const std::int64_t nz = ex.nz();
+  const Layout l = layout(ex, threads);
+  const std::int64_t num_nodes = l.node_base[nz], num_surfels = l.surfel_base[nz],
+                     num_entries = l.entry_base[nz];
 
   // First touch of the large arrays costs more than the passes themselves: fault them in
   // concurrently, with transparent huge pages where the kernel allows.
@@ -449,7 +543,7 @@ void extract(const Volume& volume, SurfelComplex& out, int threads) {
   out.surfel_offset[num_surfels] = static_cast<std::uint32_t>(num_entries);
 
   for_each_slab(nz, threads, [&](std::int64_t z0, std::int64_t z1) {
-    ex.fill(z0, z1, node_base, surfel_base, entry_base, out);
+    ex.fill(z0, z1, l.node_base, l.surfel_base, l.entry_base, &out, nullptr);
   });
 
   // Link pass: c-vertices from the node positions.
@@ -464,6 +558,23 @@ void extract(const Volume& volume, SurfelComplex& out, int threads) {
       for (int a = 0; a < 3; ++a)
         out.cvertex[3 * s + a] = static_cast<float>(sum[a] / static_cast<double>(e - b));
     }
+  });
+}
+
+/// The direct marching cubes: passes 1–3 with the mesh as the only output.
+template <class T>
+void extract_mesh(const Volume& volume, double iso, double inside_sign, int threads, Mesh& mesh,
+                  std::size_t& num_surfels) {
+  const Extractor<T> ex(volume, iso, inside_sign);
+  const std::int64_t nz = ex.nz();
+  const Layout l = layout(ex, threads);
+  const std::int64_t num_nodes = l.node_base[nz];
+  num_surfels = static_cast<std::size_t>(l.surfel_base[nz]);
+  const std::int64_t num_triangles = l.entry_base[nz] - 2 * l.surfel_base[nz];
+  tbb::parallel_invoke([&] { detail::sized(mesh.positions, 3 * num_nodes); },
+                       [&] { detail::sized(mesh.triangles, 3 * num_triangles); });
+  for_each_slab(nz, threads, [&](std::int64_t z0, std::int64_t z1) {
+    ex.fill(z0, z1, l.node_base, l.surfel_base, l.entry_base, nullptr, &mesh);
   });
 }
 
@@ -508,8 +619,11 @@ void restore_node_geometry(const Volume& volume, SurfelComplex& complex,
   });
 }
 
-SurfelComplex build_surfels(const Volume& volume, double iso, double inside_sign,
-                            const ExecutionContext& context) {
+namespace {
+
+/// The argument checks of build_surfels (also those of marching_cubes(volume), which reports
+/// the same errors with the same messages). False when the volume has no voxels.
+bool check_arguments(const Volume& volume, double iso, double inside_sign) {
   if (!std::isfinite(iso))
     fail(Status::invalid_input, "build_surfels: the iso-value must be finite");
   if (!(inside_sign == 1 || inside_sign == -1))
@@ -517,17 +631,26 @@ SurfelComplex build_surfels(const Volume& volume, double iso, double inside_sign
   // Volumes built by hand bypass the readers' check: positions beyond the float range would give
   // inf vertices (mc) and a NaN surface area (the disk cover).
   check_world_range(volume.grid, volume.source.empty() ? "build_surfels" : volume.source);
+  const auto& d = volume.grid.dims;
+  if (d[0] < 2 || d[1] < 2 || d[2] < 2) return false;  // no voxels, no surface
+  if (!volume.data.data() ||
+      volume.data.size() <
+          static_cast<std::size_t>(volume.grid.num_samples()) * scalar_size(volume.type))
+    fail(Status::internal, "build_surfels: volume sample buffer smaller than its grid");
+  return true;
+}
+
+}  // namespace
+
+SurfelComplex build_surfels(const Volume& volume, double iso, double inside_sign,
+                            const ExecutionContext& context) {
+  const bool has_voxels = check_arguments(volume, iso, inside_sign);
   SurfelComplex out;
   out.grid = volume.grid;
   out.iso = iso;
   out.inside_sign = inside_sign;
   out.surfel_offset.assign(1, 0);
-  const auto& d = volume.grid.dims;
-  if (d[0] < 2 || d[1] < 2 || d[2] < 2) return out;  // no voxels, no surface
-  if (!volume.data.data() ||
-      volume.data.size() <
-          static_cast<std::size_t>(volume.grid.num_samples()) * scalar_size(volume.type))
-    fail(Status::internal, "build_surfels: volume sample buffer smaller than its grid");
+  if (!has_voxels) return out;
   const int threads = context.threads > 0 ? context.threads : tbb::info::default_concurrency();
   tbb::task_arena arena(threads);
   arena.execute([&] {
@@ -537,6 +660,24 @@ SurfelComplex build_surfels(const Volume& volume, double iso, double inside_sign
     });
   });
   return out;
+}
+
+Mesh marching_cubes(const Volume& volume, double iso, double inside_sign,
+                    const ExecutionContext& context, std::size_t* num_surfels) {
+  if (num_surfels) *num_surfels = 0;
+  Mesh mesh;
+  if (!check_arguments(volume, iso, inside_sign)) return mesh;
+  const int threads = context.threads > 0 ? context.threads : tbb::info::default_concurrency();
+  tbb::task_arena arena(threads);
+  std::size_t surfels = 0;
+  arena.execute([&] {
+    dispatch_scalar(volume.type, [&](auto zero) {
+      using T = decltype(zero);
+      extract_mesh<T>(volume, iso, inside_sign, threads, mesh, surfels);
+    });
+  });
+  if (num_surfels) *num_surfels = surfels;
+  return mesh;
 }
 
 std::int64_t SurfelComplex::find_node(std::uint64_t key) const noexcept {
