@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "adamesh/context.h"
+#include "adamesh/error.h"
 #include "adamesh/input.h"
 #include "adamesh/io.h"
 #include "adamesh/metrics.h"
