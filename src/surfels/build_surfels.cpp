@@ -15,6 +15,10 @@
 //              (voxel (z,y,x) order, cycles in configuration order), node_fan slots and
 //              node_turn (the fan slot offset of the surfel across an outgoing edge).
 //   4. link:   per surfel, c-vertex = mean of its nodes.
+// Pass 1 also records each sample row's sign state (one sign or mixed); pass 3 sets the one-sign
+// rows without reading the samples and skips rows without nodes or surfels (Flying Edges' trim).
+// marching_cubes(volume) runs passes 1–3 with the mesh as the only output: node positions are the
+// vertices and each polygon is triangulated in pass 3, so no complex is built.
 // Node ids of a plane are found through per-plane arrays (first id, edge mask) (no hashing).
 // The result depends only on the data: identical bytes for any thread count or slab split.
 #include <tbb/blocked_range.h>
@@ -31,6 +35,7 @@
 #include <memory>
 #include <string>
 #include <type_traits>
+#include <utility>
 
 #include "adamesh/context.h"
 #include "adamesh/error.h"
@@ -143,8 +148,8 @@ class Extractor {
   /// position, each surfel's triangles where marching_cubes(complex) puts them.
   void fill(std::int64_t z0, std::int64_t z1, const std::vector<std::int64_t>& node_base,
             const std::vector<std::int64_t>& surfel_base,
-            const std::vector<std::int64_t>& entry_base, const std::vector<std::uint8_t>& row_states,
-            SurfelComplex* out, Mesh* mesh) const {
+            const std::vector<std::int64_t>& entry_base,
+            const std::vector<std::uint8_t>& row_states, SurfelComplex* out, Mesh* mesh) const {
     auto rows = [&](std::int64_t k) { return row_states.data() + k * ny_; };
     std::unique_ptr<std::uint8_t[]> s0(new std::uint8_t[plane_]), s1(new std::uint8_t[plane_]),
         s2(new std::uint8_t[plane_]);

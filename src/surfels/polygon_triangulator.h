@@ -38,13 +38,16 @@ inline constexpr int kMaxPolygonNodes = 12;  // a voxel has 12 edges
 /// Triangulates one polygon; writes (len − 2) triangles of polygon positions into `tri`.
 class PolygonTriangulator {
  public:
-  void run(int len, const std::array<Vec3, kMaxPolygonNodes>& p, const std::array<int, kMaxPolygonNodes>& local_edge,
-           std::uint32_t* tri, const std::uint32_t* ids) {
+  void run(int len, const std::array<Vec3, kMaxPolygonNodes>& p,
+           const std::array<int, kMaxPolygonNodes>& local_edge, std::uint32_t* tri,
+           const std::uint32_t* ids) {
     if (len == 4) {  // the common case, same choice and order as the general programme
-      const TriangulationCost c1{!diagonal_allowed(local_edge[1], local_edge[3]),
-                    std::min(min_angle_quality(p[0], p[1], p[3]), min_angle_quality(p[1], p[2], p[3]))};
-      const TriangulationCost c2{!diagonal_allowed(local_edge[0], local_edge[2]),
-                    std::min(min_angle_quality(p[0], p[2], p[3]), min_angle_quality(p[0], p[1], p[2]))};
+      const TriangulationCost c1{
+          !diagonal_allowed(local_edge[1], local_edge[3]),
+          std::min(min_angle_quality(p[0], p[1], p[3]), min_angle_quality(p[1], p[2], p[3]))};
+      const TriangulationCost c2{
+          !diagonal_allowed(local_edge[0], local_edge[2]),
+          std::min(min_angle_quality(p[0], p[2], p[3]), min_angle_quality(p[0], p[1], p[2]))};
       const int m = c2.better_than(c1) ? 2 : 1;
       const int o = m == 1 ? 1 : 0;  // second triangle (1,2,3) or (0,1,2)
       const std::uint32_t t[6] = {ids[0], ids[m], ids[3], ids[o], ids[o + 1], ids[o + 2]};
