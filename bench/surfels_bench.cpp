@@ -1,5 +1,7 @@
 // Surfel extraction and reference marching cubes throughput (voxels per second) on analytic
 // fields sampled into float32 volumes: a smooth gyroid (many surface voxels) and a sphere.
+// MarchingCubes = build_surfels + marching_cubes(complex); MarchingCubesDirect =
+// marching_cubes(volume), the same mesh without the complex (`adamesh mc`).
 //   surfels_bench [--benchmark_filter=...]    arguments: resolution, threads
 #include <benchmark/benchmark.h>
 
@@ -74,10 +76,22 @@ void BM_MarchingCubes(benchmark::State& state, int kind) {
   report(state, v, cx);
 }
 
+/// The same mesh straight from the volume (what `adamesh mc` runs): no complex.
+void BM_MarchingCubesDirect(benchmark::State& state, int kind) {
+  const Volume& v = field(kind, state.range(0));
+  for (auto _ : state) {
+    const Mesh m = marching_cubes(v, 0, 1, {static_cast<int>(state.range(1))});
+    benchmark::DoNotOptimize(m.triangles.data());
+  }
+  report(state, v, build_surfels(v, 0, 1, {static_cast<int>(state.range(1))}));
+}
+
 }  // namespace
 
 BENCHMARK_CAPTURE(BM_BuildSurfels, gyroid, 0)->ArgsProduct({{128, 256}, {1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_BuildSurfels, sphere, 1)->ArgsProduct({{256}, {1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_MarchingCubes, gyroid, 0)->ArgsProduct({{256}, {1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_MarchingCubesDirect, gyroid, 0)->ArgsProduct({{256}, {1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_MarchingCubesDirect, sphere, 1)->ArgsProduct({{256}, {1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 BENCHMARK_MAIN();

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "adamesh/context.h"
+#include "adamesh/error.h"
 #include "adamesh/input.h"
 #include "adamesh/io.h"
 #include "adamesh/metrics.h"
@@ -40,11 +41,26 @@ struct Expect {
   std::int64_t euler, components, loops;
 };
 
-/// Builds complex + mesh and checks the invariants every mesh must have.
+/// Same vertex and triangle bytes.
+void expect_same_mesh(const Mesh& a, const Mesh& b, const std::string& what = "") {
+  ASSERT_EQ(a.positions.size(), b.positions.size()) << what;
+  ASSERT_EQ(a.triangles.size(), b.triangles.size()) << what;
+  EXPECT_EQ(0, std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(float)))
+      << what;
+  EXPECT_EQ(0, std::memcmp(a.triangles.data(), b.triangles.data(), a.triangles.size() * 4)) << what;
+}
+
+/// Builds complex + mesh and checks the invariants every mesh must have, and that the direct
+/// path (marching_cubes(volume), no complex) gives the same bytes with 1 and 2 threads.
 MeshTopology check_mc(const Volume& v, double iso, double inside_sign = 1) {
   const SurfelComplex cx = build_surfels(v, iso, inside_sign);
   EXPECT_EQ(validate_complex(cx), 0);
   const Mesh m = marching_cubes(cx);
+  for (int threads : {1, 2}) {
+    std::size_t surfels = 0;
+    expect_same_mesh(marching_cubes(v, iso, inside_sign, {threads}, &surfels), m, "direct");
+    EXPECT_EQ(surfels, cx.num_surfels());
+  }
   EXPECT_EQ(m.num_vertices(), cx.num_nodes());
   EXPECT_EQ(m.num_triangles(), cx.surfel_nodes.size() - 2 * cx.num_surfels());
   const MeshTopology t = mesh_topology(m);
@@ -227,6 +243,52 @@ TEST(MarchingCubes, ThreadCountGivesIdenticalMeshBytes) {
   ASSERT_EQ(a.triangles.size(), b.triangles.size());
   EXPECT_EQ(0, std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(float)));
   EXPECT_EQ(0, std::memcmp(a.triangles.data(), b.triangles.data(), a.triangles.size() * 4));
+}
+
+TEST(MarchingCubes, DirectPathGivesTheComplexPathsBytes) {
+  // marching_cubes(volume) against marching_cubes(build_surfels(volume)): many slab splits
+  // (threads 1..5 and all cores), thin grids, a mirrored grid, every scalar type, no voxels.
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> u(-0.5, 0.5);
+  const Volume v = sample_volume({41, 29, 37}, [&](double i, double j, double k) {
+    return std::sin(i * 0.45) * std::cos(j * 0.3) + std::sin(k * 0.55) + u(rng);
+  });
+  for (double sign : {1.0, -1.0}) {
+    const Mesh ref = marching_cubes(build_surfels(v, 0.1, sign, {1}));
+    EXPECT_GT(ref.num_triangles(), 1000u);
+    for (int threads : {0, 1, 2, 3, 4, 5})
+      expect_same_mesh(marching_cubes(v, 0.1, sign, {threads}), ref, std::to_string(threads));
+  }
+  for (std::array<std::int64_t, 3> d : {std::array<std::int64_t, 3>{2, 2, 9}, {9, 2, 2}, {2, 9, 2},
+                                        {3, 2, 17}, {17, 3, 2}, {19, 18, 2}, {2, 23, 21}}) {
+    const Volume t = sample_volume(d, [&](double, double, double) { return u(rng); });
+    for (int threads : {1, 2, 3})
+      expect_same_mesh(marching_cubes(t, 0.1, 1, {threads}),
+                       marching_cubes(build_surfels(t, 0.1, 1, {threads})),
+                       std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" + std::to_string(d[2]));
+  }
+  Grid g = cube_grid(20, -1.3, 1.3);
+  g.direction = Mat3::from_columns({-1, 0, 0}, {0, 1, 0}, {0, 0, 1});
+  g.origin.x = 1.3;
+  const Volume mirrored = sample_world(g, [](const Vec3& p) { return norm(p) - 1.0; });
+  expect_same_mesh(marching_cubes(mirrored, 0, -1, {2}),
+                   marching_cubes(build_surfels(mirrored, 0, -1, {2})), "mirrored");
+  for (ScalarType type : {ScalarType::u8, ScalarType::i16, ScalarType::u32, ScalarType::f64}) {
+    Volume w = allocate_volume(v.grid, type, "t");
+    dispatch_scalar(type, [&](auto zero) {
+      using T = decltype(zero);
+      for (std::int64_t x = 0; x < v.grid.num_samples(); ++x)
+        w.samples<T>()[x] = static_cast<T>(std::round(60 + 40 * v.samples<float>()[x]));
+    });
+    expect_same_mesh(marching_cubes(w, 60.5, 1, {2}),
+                     marching_cubes(build_surfels(w, 60.5, 1, {2})), to_string(type));
+  }
+  std::size_t surfels = 7;
+  const Volume flat = sample_volume({5, 5, 1}, [](double i, double, double) { return i - 2; });
+  EXPECT_EQ(marching_cubes(flat, 0.5, 1, {}, &surfels).num_triangles(), 0u);
+  EXPECT_EQ(surfels, 0u);
+  EXPECT_THROW(marching_cubes(v, std::nan(""), 1), Error);
+  EXPECT_THROW(marching_cubes(v, 0, 0), Error);
 }
 
 TEST(MarchingCubes, TriangulationMaximisesTheMinimumAngle) {

@@ -84,11 +84,8 @@ int cmd_mc(const Argv& argv) {
   const auto t_mesh = std::chrono::steady_clock::now();
   Mesh mesh;
   std::size_t surfels = 0;
-  arena.execute([&] {
-    const SurfelComplex cx = build_surfels(*in.volume, iso, in.inside_sign, ctx);
-    surfels = cx.num_surfels();
-    mesh = marching_cubes(cx);
-  });
+  // Straight from the volume: the mesh of marching_cubes(build_surfels(...)) without the complex.
+  arena.execute([&] { mesh = marching_cubes(*in.volume, iso, in.inside_sign, ctx, &surfels); });
   const double mesh_s = seconds_since(t_mesh);
 
   const auto t_write = std::chrono::steady_clock::now();

@@ -141,4 +141,14 @@ void restore_node_geometry(const Volume& volume, SurfelComplex& complex,
 /// χ(mesh) = complex.euler_characteristic(). Parallel (ambient oneTBB arena), deterministic.
 Mesh marching_cubes(const SurfelComplex& complex);
 
+/// Reference marching cubes straight from the volume: the same mesh as
+/// marching_cubes(build_surfels(volume, iso, inside_sign, context)), byte for byte and for any
+/// thread count, without building the complex (no keys, fans, c-vertices): the same count and
+/// prefix passes, then one fill pass writing node positions and each polygon's triangles.
+/// `num_surfels` (optional) receives the number of surfels (polygons) triangulated.
+/// \throw as build_surfels.
+Mesh marching_cubes(const Volume& volume, double iso, double inside_sign = 1,
+                    const ExecutionContext& context = default_context(),
+                    std::size_t* num_surfels = nullptr);
+
 }  // namespace adamesh

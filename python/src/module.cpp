@@ -344,7 +344,7 @@ PyMesh run_mc(py::object source, std::optional<double> iso, const InputOptions& 
     if (iso) value = *iso;
     else if (in->default_iso) value = *in->default_iso;
     else fail(Status::usage, in->spec + ": an iso-value is required for volume files");
-    return PyMesh{marching_cubes(build_surfels(*in->volume, value, in->inside_sign, ctx))};
+    return PyMesh{marching_cubes(*in->volume, value, in->inside_sign, ctx)};  // no complex kept
   });
 }
 
