@@ -63,6 +63,11 @@ class StageTicker {
     ctx_.check_cancelled();
     if (ctx_.progress && due()) report(fraction());
   }
+  /// Sets the fraction that the plain tick() reports from now on (no check, no report): for a
+  /// loop whose inner helpers tick without knowing the fraction.
+  void set_fraction(double fraction) {
+    fraction_ = fraction < 0 ? 0 : fraction > 1 ? 1 : fraction;
+  }
   /// Checks cancellation and reports `fraction` (throttled) now, whatever the count.
   void poll(double fraction) {
     count_ = 0;

@@ -123,6 +123,9 @@ class Refiner {
     // only, so the result is the same for any thread count; the budget check is per split.
     bool full = false;
     while (!heap.empty() && !full) {
+      // The placements' and evaluations' ticks report this fraction.
+      tick_.set_fraction(static_cast<double>(forest_.num_leaves()) /
+                         static_cast<double>(max_triangles));
       const std::uint32_t first = num_splits();
       const std::size_t cap = std::max<std::size_t>(1, forest_.num_leaves() / kBudgetBatch);
       std::size_t batch = 0;
