@@ -330,8 +330,9 @@ class Improver {
   /// move half way to the mean of their neighbours (a fold or a crossing made by placements on a
   /// noisy surface unfolds; projecting back onto the surface folds it again: where two sheets of
   /// the surface are closer than the triangles are wide, no mesh on the surface avoids crossing),
-  /// all at once, and a round is kept only when the count goes down; when it
-  /// does not, the next round also moves their neighbours (up to two rings). Fixed and boundary
+  /// all at once, and a round is kept only when the count goes down (the rounds stop after one
+  /// that removes under 1 %); when it does not, the next round also moves their neighbours (up
+  /// to two rings). Fixed and boundary
   /// vertices stay, the box and an explicit error bound hold. The count is exact but
   /// incremental (issue 14): after the first full count only pairs with a triangle around a
   /// moved vertex are tested again (the connectivity does not change here).
