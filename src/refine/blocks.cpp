@@ -15,16 +15,16 @@
 // augmenting paths make it a maximum matching of the good blocks, then a perfect matching of the
 // whole doubled graph. Boost's augmenting-path search scans the whole graph for every path
 // (O(n·m) when the seed leaves many vertices unmatched: a 285k-triangle base of the frog ran for
-// more than 15 minutes), so base meshes of at least `local_from` triangles first augment inside
-// small balls around each unmatched vertex (induced subgraphs closed under the matching, so a path
-// found there augments the whole graph); only what is left goes to the global search, and for the
-// good blocks not at all (a maximal, not maximum, set of good blocks on those inputs).
+// more than 15 minutes), so every base first augments inside small balls around each unmatched
+// vertex (induced subgraphs closed under the matching, so a path found there augments the whole
+// graph); only what is left goes to the global search — for the good blocks only on bases under
+// `local_from` triangles (a maximal, not maximum, set of good blocks on larger ones).
 // Augmenting paths ignore shapes, so the perfect matching is then improved
-// locally by alternating chains (≤ 10 exchanges; ≤ 6 on bases of `local_from` triangles or more,
-// frog: matching 26 → 7.5 s, 47 → 52 % of its triangles in blocks with a child below 20°) that
-// raise the total block weight: a local search for a maximum-weight perfect matching that keeps
-// perfection. Boost headers stay inside
-// this file.
+// locally by alternating chains (≤ 10 exchanges from blocks with a child below 20°, ≤ 6 from good
+// ones; ≤ 6 for all on bases of `local_from` triangles or more, frog: matching 26 → 7.5 s, 47 →
+// 52 % of its triangles in blocks with a child below 20°) that raise the total block weight: a
+// local search for a maximum-weight perfect matching that keeps perfection. Boost headers stay
+// inside this file.
 //
 // Fallback when no perfect matching exists (non-manifold input): three quads per triangle
 // (corner, two edge midpoints, centroid), each split along the diagonal that gives the better
