@@ -62,9 +62,10 @@ struct RefineOptions {
   /// Testing: build blocks with the fallback (three quads per base triangle) even when a perfect
   /// matching exists.
   bool force_quad_blocks = false;
-  /// Base meshes with at least this many triangles pair their blocks by augmenting paths inside
-  /// small balls around the unmatched triangles first (the global search costs O(n·m) on large
-  /// noisy bases); smaller ones use the global search only. Testing sets 0 to force the local path.
+  /// Every base pairs its blocks by augmenting paths inside small balls around the unmatched
+  /// triangles first (the global search costs O(n·m)); bases with at least this many triangles
+  /// keep the local (maximal) set of good blocks and search shorter improving chains, smaller
+  /// ones complete a maximum good matching globally. Testing sets 0 to force the large-base path.
   std::size_t local_matching_from = 16384;
 };
 

@@ -84,9 +84,11 @@ struct Blocks {
   std::size_t greedy_pairs = 0, augmentations = 0, blocks = 0, border_half_blocks = 0;
   std::size_t local_augmentations = 0;  ///< of the augmentations, found inside local balls
 };
-/// Base meshes with at least `local_from` triangles augment the greedy seed inside small balls
-/// first (blocks.cpp); smaller ones use Boost's global search only. `ticker` (optional) is ticked
-/// in the searches for augmenting paths and the improvement passes.
+/// Every base augments the greedy seed inside small balls first (blocks.cpp); bases under
+/// `local_from` triangles then complete a maximum matching of the good blocks by Boost's global
+/// search and search 10-exchange chains from sub-20° blocks, larger ones keep the local result
+/// and 6-exchange chains. `ticker` (optional) is ticked in the searches for augmenting paths and
+/// the improvement passes.
 Blocks match_blocks(const std::vector<Vec3>& positions,
                     const std::vector<std::array<std::uint32_t, 3>>& triangles,
                     std::size_t local_from, StageTicker* ticker = nullptr);
