@@ -1,5 +1,6 @@
 // libFuzzer target for one adamesh reader (docs/FUZZING.md). Built once per format with
-// FUZZ_EXT (the file extension that selects the reader) and FUZZ_KIND (0 volume, 1 mesh, 2 .amh).
+// FUZZ_EXT (the file extension that selects the reader) and FUZZ_KIND (0 volume, 1 mesh, 2 .amh,
+// 3 DICOM series).
 // The input bytes go to a file with that extension (the readers take paths) and are read; the
 // only accepted failure is adamesh::Error — a crash, a sanitizer report, a hang or an allocation
 // beyond libFuzzer's -malloc_limit_mb is a finding.
@@ -11,14 +12,24 @@
 // so the mutations reach the body, the validation and the replay. The raw bytes are also read
 // with allow_partial (the `--partial` path, where a size mismatch skips the checksum). A custom
 // mutator seals most mutants too, so the stored corpus holds consistent files.
+//
+// The DICOM target (FUZZ_KIND 3) splits its input at kSliceSeparator into slice files in a folder
+// of its own and reads the folder as a series (read_volume(dir): GDCM's parser, the meta-header
+// walk, geometry, decoding of every transfer syntax GDCM has), then the first slice by name (its
+// series from the slice's folder). The seeds are small series of several syntaxes written by
+// tests/dicom_test.cpp, their files joined with the separator.
 #include <unistd.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <functional>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "adamesh/error.h"
@@ -135,6 +146,103 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (copy.size() != size || (size > 0 && std::memcmp(copy.data(), data, size) != 0)) {
     if (!write_scratch(data, size)) return 0;
     read_amh(true);  // the raw bytes as `level --partial` reads them
+  }
+  return 0;
+}
+#elif FUZZ_KIND == 3
+// Must match kFuzzSliceSeparator in tests/dicom_test.cpp (which writes the seeds).
+constexpr char kSliceSeparator[] = "\n--adamesh-fuzz-next-slice--\n";
+
+// The DICOM reader runs GDCM in a child process (src/io/dicom.cpp) and turns the child's death
+// into an Error, so neither a crash of GDCM nor one of adamesh's own code in the child would
+// stop the fuzzer. The child's stderr (the sanitizer report) goes to a log here: a report whose
+// top frame is in GDCM or a codec library (or a GDCM assertion) is third-party — the input is
+// kept in build/fuzz/third-party/dicom/ and fuzzing goes on; any other death of the child is a
+// finding (trap, so libFuzzer saves the input), with the report copied to stderr.
+const std::string& child_log() {
+  static const std::string path = [] {
+    const std::string p = std::string(scratch_path()) + ".child-stderr";
+    setenv("ADAMESH_DICOM_CHILD_STDERR", p.c_str(), 1);
+    return p;
+  }();
+  return path;
+}
+
+void triage_child_crash(const std::uint8_t* data, std::size_t size) {
+  std::string log;
+  if (std::FILE* f = std::fopen(child_log().c_str(), "rb")) {
+    char buf[4096];
+    for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, f)) > 0;) log.append(buf, n);
+    std::fclose(f);
+  }
+  // The first stack frame of the report, or GDCM's assertion line.
+  const std::size_t frame = log.find("    #0 ");
+  const std::string top =
+      frame == std::string::npos ? "" : log.substr(frame, log.find('\n', frame) - frame);
+  bool third_party = false;
+  for (const char* lib : {"libgdcm", "libopenjp2", "libCharLS", "libjpeg", "gdcm::"})
+    third_party |= top.find(lib) != std::string::npos;
+  if (frame == std::string::npos && log.find("Assertion") != std::string::npos &&
+      log.find("gdcm") != std::string::npos)
+    third_party = true;
+  if (!third_party) {
+    std::fprintf(stderr, "fuzz_dicom: the reader's child died outside GDCM; its stderr:\n%s\n",
+                 log.c_str());
+    __builtin_trap();
+  }
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path keep = "build/fuzz/third-party/dicom";
+  fs::create_directories(keep, ec);
+  const std::size_t h = std::hash<std::string_view>{}(
+      std::string_view(reinterpret_cast<const char*>(data), size));
+  const std::string name = (keep / ("gdcm-" + std::to_string(h))).string();
+  if (std::FILE* f = std::fopen(name.c_str(), "wb")) {
+    std::fwrite(data, 1, size, f);
+    std::fclose(f);
+  }
+  if (std::FILE* f = std::fopen((name + ".log").c_str(), "wb")) {
+    std::fwrite(log.data(), 1, log.size(), f);
+    std::fclose(f);
+  }
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  namespace fs = std::filesystem;
+  static const fs::path dir = fs::path(scratch_path()).replace_extension(".dir");
+  (void)child_log();  // sets ADAMESH_DICOM_CHILD_STDERR
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+  fs::create_directories(dir, ec);
+  if (ec) return 0;
+  const std::string_view bytes(reinterpret_cast<const char*>(data), size);
+  const std::string_view sep(kSliceSeparator, sizeof kSliceSeparator - 1);
+  std::size_t start = 0;
+  int n = 0;
+  std::string first;
+  while (n < 16) {  // at most 16 slices: a long input stays one big slice at the end
+    const std::size_t end = bytes.find(sep, start);
+    const std::string_view part = bytes.substr(start, end == bytes.npos ? bytes.npos : end - start);
+    const std::string name = (dir / ("IM" + std::to_string(100 + n) + ".dcm")).string();
+    if (std::FILE* f = std::fopen(name.c_str(), "wb")) {
+      if (!part.empty()) std::fwrite(part.data(), 1, part.size(), f);
+      std::fclose(f);
+    }
+    if (n == 0) first = name;
+    ++n;
+    if (end == bytes.npos) break;
+    start = end + sep.size();
+  }
+  for (const std::string& path : {dir.string(), first}) {
+    try {
+      const adamesh::Volume v = adamesh::read_volume(path);
+      if (v.grid.num_samples() > 0) (void)(v.at(0) + v.at(v.grid.num_samples() - 1));
+    } catch (const adamesh::Error& e) {
+      const std::string what = e.what();
+      if (what.find("GDCM crashed") != std::string::npos ||
+          what.find("ended without a result") != std::string::npos)
+        triage_child_crash(data, size);
+    }
   }
   return 0;
 }

@@ -8,6 +8,8 @@ cd "$(dirname "$0")/.."
 build=${1:-build/test}
 corpus=fuzz/corpus
 cli=$build/apps/adamesh/adamesh
+ADAMESH_FUZZ_SEEDS=$PWD/$corpus "$build/tests/dicom_test" \
+  --gtest_filter=Dicom.SmallSeriesInEverySyntaxReadBack >/dev/null
 ADAMESH_FUZZ_SEEDS=$PWD/$corpus "$build/tests/io_volume_test" \
   --gtest_filter=VolumeRobustness.SeedsAreValid >/dev/null
 for f in ply obj off stl amh; do mkdir -p "$corpus/$f"; done

@@ -604,5 +604,73 @@ TEST(Hardening, DicomPreambleWithACutShortMetaHeaderIsAnError) {
   EXPECT_EQ(r.err.find("DICOM"), std::string::npos) << r.err;
 }
 
+TEST(Hardening, DicomLengthsBeyondTheFileAreErrorsNotAllocations) {
+  // fuzz_dicom, first minute: a 9 KB slice whose element declared 2.6 GB made GDCM allocate the
+  // value before reading it (gdcm::ByteValue::SetLength; libFuzzer's malloc limit caught it).
+  // Every element, item and fragment length is now checked against the file (and against what
+  // encloses it) before GDCM sees the file; each variant is one clean error naming the problem.
+  TempDir tmp;
+  auto le16 = [](unsigned v) { return std::string{char(v & 0xff), char(v >> 8)}; };
+  auto le32 = [&](std::uint32_t v) { return le16(v & 0xffff) + le16(v >> 16); };
+  auto tag = [&](unsigned g, unsigned e) { return le16(g) + le16(e); };
+  auto meta = [&](const std::string& ts) {  // preamble, DICM, (0002,0010) transfer syntax
+    std::string uid = ts;
+    if (uid.size() % 2) uid.push_back('\0');
+    return std::string(128, '\0') + "DICM" + tag(2, 0x10) + "UI" + le16(unsigned(uid.size())) + uid;
+  };
+  const std::string implicit = meta("1.2.840.10008.1.2"), explicit_le = meta("1.2.840.10008.1.2.1");
+  const std::string ct = tag(8, 0x60) + le32(2) + "CT";
+  const std::uint32_t huge = 0x9c000000u, undefined = 0xffffffffu;
+  const std::pair<std::string, std::string> cases[] = {
+      {"implicit element", implicit + ct + tag(0x10, 0x10) + le32(huge) + "Doe^John"},
+      {"explicit OB", explicit_le + tag(0x10, 0x10) + "PN" + le16(4) + "Doe " + tag(0x7fe0, 0x10) +
+                          "OB" + le16(0) + le32(huge) + std::string(64, 'x')},
+      {"item inside a sequence",
+       implicit + ct + tag(8, 0x1140) + le32(undefined) + tag(0xfffe, 0xe000) + le32(undefined) +
+           tag(8, 0x1150) + le32(huge) + "1.2.3"},
+      {"sequence of defined length", implicit + ct + tag(8, 0x1140) + le32(24) +
+                                         tag(0xfffe, 0xe000) + le32(16) + tag(8, 0x1150) +
+                                         le32(huge) + std::string(8, '1')},
+      {"fragment", explicit_le + tag(0x7fe0, 0x10) + "OB" + le16(0) + le32(undefined) +
+                       tag(0xfffe, 0xe000) + le32(0) + tag(0xfffe, 0xe000) + le32(huge) + "ab"},
+      // fuzz_dicom's second finding: the sequence delimitation's length read as a fragment's.
+      {"delimitation", explicit_le + tag(0x7fe0, 0x10) + "OB" + le16(0) + le32(undefined) +
+                           tag(0xfffe, 0xe000) + le32(0) + tag(0xfffe, 0xe000) + le32(2) + "ab" +
+                           tag(0xfffe, 0xe0dd) + le32(0xffff0000u)},
+  };
+  for (const auto& [name, bytes] : cases) {
+    const std::string path = tmp.file("slice.dcm");
+    write_bytes(path, bytes);
+    try {
+      (void)read_volume(path);
+      ADD_FAILURE() << name << ": read";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("not a readable DICOM file"), std::string::npos)
+          << name << ": " << e.what();
+      const std::string what = e.what();
+      EXPECT_TRUE(what.find("declares") != std::string::npos ||
+                  what.find("delimitation with a length") != std::string::npos)
+          << name << ": " << what;
+    }
+  }
+  // Sequences nested 40 deep: refused before GDCM's recursion.
+  std::string deep = implicit + ct;
+  for (int i = 0; i < 40; ++i)
+    deep += tag(8, 0x1140) + le32(undefined) + tag(0xfffe, 0xe000) + le32(undefined);
+  write_bytes(tmp.file("deep.dcm"), deep);
+  EXPECT_THROW((void)read_volume(tmp.file("deep.dcm")), Error);
+  // On the command line, for the slice and for its folder: one line naming the file, exit 2.
+  fs::create_directory(tmp.file("series"));
+  write_bytes(tmp.file("series/IM1"), cases[0].second);
+  for (const std::string arg : {tmp.file("series/IM1"), tmp.file("series")}) {
+    const auto r = run_cli("info " + arg);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find("IM1: not a readable DICOM file: element (0010,0010) declares"),
+              std::string::npos)
+        << r.err;
+  }
+}
+
 }  // namespace
 }  // namespace adamesh
