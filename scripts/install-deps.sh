@@ -18,6 +18,7 @@ pkgs=(
   libmeshoptimizer-dev  # benchmark peer: marching cubes + meshopt_simplify
   nlohmann-json3-dev    # JSON reports (only in .cpp files that write or read JSON)
   libgtest-dev libgmock-dev libbenchmark-dev
+  curl xz-utils         # scripts/build-tbb-tsan.sh: oneTBB's Debian source for the TSan job
   python3
   # Python package (python/, docs/PYTHON.md): module, tests, example; `pip install .` offline
   # (in-tree build backend: pip and venv only, nothing downloaded)
