@@ -18,9 +18,11 @@
 // walk, geometry, decoding of every transfer syntax GDCM has), then the first slice by name (its
 // series from the slice's folder). The seeds are small series of several syntaxes written by
 // tests/dicom_test.cpp, their files joined with the separator.
+#include <pthread.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <csignal>
 #include <filesystem>
 #include <functional>
 #include <cstddef>
@@ -159,10 +161,27 @@ constexpr char kSliceSeparator[] = "\n--adamesh-fuzz-next-slice--\n";
 // top frame is in GDCM or a codec library (or a GDCM assertion) is third-party — the input is
 // kept in build/fuzz/third-party/dicom/ and fuzzing goes on; any other death of the child is a
 // finding (trap, so libFuzzer saves the input), with the report copied to stderr.
+extern "C" void __sanitizer_set_death_callback(void (*callback)(void));
+extern "C" void __sanitizer_print_stack_trace();
+
+// In the reader's child, libFuzzer's crash handlers and death callback would save the input as a
+// finding of their own: a fatal signal instead prints the stack (for the triage) and kills the
+// child with that signal, and a sanitizer report ends the child without libFuzzer's callback.
+void child_fatal_signal(int sig) {
+  __sanitizer_print_stack_trace();
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+void after_fork_in_child() {
+  __sanitizer_set_death_callback(nullptr);
+  for (const int sig : {SIGSEGV, SIGBUS, SIGABRT, SIGFPE, SIGILL}) std::signal(sig, child_fatal_signal);
+}
+
 const std::string& child_log() {
   static const std::string path = [] {
     const std::string p = std::string(scratch_path()) + ".child-stderr";
     setenv("ADAMESH_DICOM_CHILD_STDERR", p.c_str(), 1);
+    pthread_atfork(nullptr, nullptr, after_fork_in_child);
     return p;
   }();
   return path;
@@ -175,16 +194,28 @@ void triage_child_crash(const std::uint8_t* data, std::size_t size) {
     for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, f)) > 0;) log.append(buf, n);
     std::fclose(f);
   }
-  // The first stack frame of the report, or GDCM's assertion line.
-  const std::size_t frame = log.find("    #0 ");
-  const std::string top =
-      frame == std::string::npos ? "" : log.substr(frame, log.find('\n', frame) - frame);
+  // GDCM's own assertion (Debian keeps them): "...gdcm<File>.cxx:N: ... Assertion ... failed."
   bool third_party = false;
-  for (const char* lib : {"libgdcm", "libopenjp2", "libCharLS", "libjpeg", "gdcm::"})
-    third_party |= top.find(lib) != std::string::npos;
-  if (frame == std::string::npos && log.find("Assertion") != std::string::npos &&
-      log.find("gdcm") != std::string::npos)
-    third_party = true;
+  for (std::size_t at = log.find("Assertion"); at != std::string::npos;
+       at = log.find("Assertion", at + 1)) {
+    const std::size_t line = log.rfind('\n', at) + 1;  // npos + 1 = 0 on the first line
+    third_party |= log.substr(line, at - line).find("gdcm") != std::string::npos;
+  }
+  // Otherwise the first frame of the first stack that is not the sanitizer's, libFuzzer's or
+  // libc's signal/abort machinery.
+  if (!third_party) {
+    for (std::size_t at = log.find("    #"); at != std::string::npos; at = log.find("    #", at + 1)) {
+      const std::string frame = log.substr(at, log.find('\n', at) - at);
+      bool runtime = false;
+      for (const char* r : {"__sanitizer", "fuzzer::", "__asan", "__ubsan", "libc.so", "abort",
+                            "raise", "__assert", "gsignal", "pthread_kill", "child_fatal_signal"})
+        runtime |= frame.find(r) != std::string::npos;
+      if (runtime) continue;
+      for (const char* lib : {"libgdcm", "libopenjp2", "libCharLS", "libjpeg", "gdcm::"})
+        third_party |= frame.find(lib) != std::string::npos;
+      break;
+    }
+  }
   if (!third_party) {
     std::fprintf(stderr, "fuzz_dicom: the reader's child died outside GDCM; its stderr:\n%s\n",
                  log.c_str());
