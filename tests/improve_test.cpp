@@ -3,8 +3,12 @@
 // angles.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
+#include <string>
 
+#include "adamesh/context.h"
+#include "adamesh/error.h"
 #include "adamesh/improve.h"
 #include "adamesh/input.h"
 #include "adamesh/metrics.h"
@@ -112,6 +116,39 @@ TEST(Improve, NoisyBaseMeshKeepsTopologyAndGetsBetter) {
   for (std::size_t v = 0; v < m.num_vertices(); ++v)
     worst = std::max(worst, std::abs(signed_distance(*in.field, 0.0, m.vertex(v))));
   EXPECT_LT(worst, 0.05 * o.voxel);
+}
+
+TEST(Fit, ReportsProgressAndHonoursCancelWithAThreadCount) {
+  // fit_least_squares() with context.threads > 0 runs itself inside a task arena; that inner
+  // call used to get a default context, so neither progress nor cancellation reached it.
+  InputOptions io;
+  io.resolution = 32;
+  const Input in = load_input("shape:sphere", io);
+  const SurfelComplex sc = build_surfels(*in.volume, 0.0, in.inside_sign);
+  const BaseMesh base = simplify(sc, in.field.get());
+  FitOptions fo;
+  fo.max_step = 0.5 * sc.grid.min_spacing();
+  for (const int threads : {0, 1, 2}) {
+    SCOPED_TRACE(threads);
+    Mesh m = base.mesh;
+    int reports = 0;
+    ExecutionContext ctx;
+    ctx.threads = threads;
+    ctx.progress = [&](const char* stage, double) { reports += std::string(stage) == "fit"; };
+    const FitStats st = fit_least_squares(m, base.border, *in.field, 0.0, fo, ctx);
+    EXPECT_EQ(st.passes, fo.passes);
+    EXPECT_EQ(reports, fo.passes);
+    std::atomic<bool> stop{true};
+    ExecutionContext cancelled;
+    cancelled.threads = threads;
+    cancelled.cancel = &stop;
+    try {
+      (void)fit_least_squares(m, base.border, *in.field, 0.0, fo, cancelled);
+      ADD_FAILURE() << "not cancelled";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.status(), Status::cancelled);
+    }
+  }
 }
 
 TEST(Improve, Deterministic) {

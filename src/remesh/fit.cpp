@@ -60,8 +60,12 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
                            const ScalarField& field, double iso, const FitOptions& o,
                            const ExecutionContext& context) {
   if (context.threads > 0) {
+    // The same call inside an arena of that many threads, with the caller's progress callback
+    // and cancellation flag (it used to drop them: `--fit l2` could not be cancelled).
+    ExecutionContext inside = context;
+    inside.threads = 0;
     tbb::task_arena arena(context.threads);
-    return arena.execute([&] { return fit_least_squares(mesh, fixed, field, iso, o); });
+    return arena.execute([&] { return fit_least_squares(mesh, fixed, field, iso, o, inside); });
   }
   FitStats st;
   const std::size_t nv = mesh.num_vertices(), nt = mesh.num_triangles();
