@@ -633,6 +633,12 @@ TEST(Hardening, DicomLengthsBeyondTheFileAreErrorsNotAllocations) {
                                          le32(huge) + std::string(8, '1')},
       {"fragment", explicit_le + tag(0x7fe0, 0x10) + "OB" + le16(0) + le32(undefined) +
                        tag(0xfffe, 0xe000) + le32(0) + tag(0xfffe, 0xe000) + le32(huge) + "ab"},
+      // fuzz_dicom: an unknown VR ("CS" → "MS") is read by GDCM with a 4-byte length.
+      {"unknown VR", explicit_le + tag(0x28, 0x4) + "MS" + le16(12) + "MONOCHROME2 " +
+                         tag(0x28, 0x10) + "US" + le16(2) + le16(32)},
+      // A UN value holding implicit VR items, as GDCM re-reads a UN its dictionary calls SQ.
+      {"UN sequence", explicit_le + tag(8, 0x1140) + "UN" + le16(0) + le32(16) +
+                          tag(0xfffe, 0xe000) + le32(8) + tag(8, 0x1150) + le32(huge)},
       // fuzz_dicom's second finding: the sequence delimitation's length read as a fragment's.
       {"delimitation", explicit_le + tag(0x7fe0, 0x10) + "OB" + le16(0) + le32(undefined) +
                            tag(0xfffe, 0xe000) + le32(0) + tag(0xfffe, 0xe000) + le32(2) + "ab" +
@@ -649,7 +655,8 @@ TEST(Hardening, DicomLengthsBeyondTheFileAreErrorsNotAllocations) {
           << name << ": " << e.what();
       const std::string what = e.what();
       EXPECT_TRUE(what.find("declares") != std::string::npos ||
-                  what.find("delimitation with a length") != std::string::npos)
+                  what.find("delimitation with a length") != std::string::npos ||
+                  what.find("unknown VR 'MS'") != std::string::npos)
           << name << ": " << what;
     }
   }

@@ -16,6 +16,7 @@
 
 #include <fcntl.h>
 #include <sys/mman.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -30,6 +31,7 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <new>
 #include <sstream>
 #include <type_traits>
 #include <utility>
@@ -142,6 +144,17 @@ class StructureWalk {
   static bool is_vr(const unsigned char* v) {
     return v[0] >= 'A' && v[0] <= 'Z' && v[1] >= 'A' && v[1] <= 'Z';
   }
+  /// One of PS3.5's value representations. GDCM reads any other two letters with a 4-byte
+  /// length (fuzz_dicom: "CS" turned into "MS" made it allocate 1.3 GB for a 2 KB file).
+  static bool known_vr(const unsigned char* v) {
+    static const char* const kAll[] = {"AE", "AS", "AT", "CS", "DA", "DS", "DT", "FD", "FL", "IS",
+                                       "LO", "LT", "OB", "OD", "OF", "OL", "OV", "OW", "PN", "SH",
+                                       "SL", "SQ", "SS", "ST", "SV", "TM", "UC", "UI", "UL", "UN",
+                                       "UR", "US", "UT", "UV"};
+    for (const char* k : kAll)
+      if (v[0] == k[0] && v[1] == k[1]) return true;
+    return false;
+  }
   static bool long_vr(const unsigned char* v) {
     static const char* const kLong[] = {"OB", "OD", "OF", "OL", "OV", "OW", "SQ",
                                         "SV", "UC", "UN", "UR", "UT", "UV"};
@@ -172,8 +185,9 @@ class StructureWalk {
         big_endian_ = big_endian_data_;  // the meta group itself is always little endian
         return "";
       }
-      if (!is_vr(b + 4)) return "File Meta Information element " + tag_name(group, element) +
-                                " has no explicit VR";
+      if (!is_vr(b + 4) || !known_vr(b + 4))
+        return "File Meta Information element " + tag_name(group, element) +
+               " has no valid explicit VR";
       std::uint64_t header = 8, length = b[6] | b[7] << 8u;
       if (long_vr(b + 4)) {
         if (!read_at(pos, b, 12)) return "File Meta Information cut short";
@@ -221,6 +235,9 @@ class StructureWalk {
       bool sequence = false, implicit_inside = !explicit_vr;
       if (explicit_vr) {
         if (!is_vr(b + 4)) return "element " + tag + " has no explicit VR";
+        if (!known_vr(b + 4))
+          return "element " + tag + " has an unknown VR '" + std::string(1, char(b[4])) +
+                 std::string(1, char(b[5])) + "'";
         if (long_vr(b + 4)) {
           if (pos + 12 > end || !read_at(pos, b, 12)) return "element " + tag + " cut short";
           header = 12;
@@ -235,6 +252,15 @@ class StructureWalk {
         }
         if (!sequence && length == kUndefined && !(b[4] == 'O' && (b[5] == 'B' || b[5] == 'W')))
           return "element " + tag + " has an undefined length";
+        if (b[4] == 'U' && b[5] == 'N' && length != kUndefined && length >= 8) {
+          // GDCM re-reads a UN value that its dictionary calls a sequence as implicit VR items:
+          // walk it as such when it starts with an item tag.
+          unsigned char first[4];
+          if (read_at(pos + header, first, 4) && u16(first) == 0xfffe && u16(first + 2) == 0xe000) {
+            sequence = true;
+            implicit_inside = true;
+          }
+        }
       } else {
         length = u32(b + 4);
         // Implicit VR: an undefined length means a sequence; a defined-length one is known by
@@ -402,8 +428,44 @@ const char* signal_name(int sig) {
   }
 }
 
+/// Bytes of the regular files at `path` (a file, or the files of a folder, not recursive).
+std::uint64_t input_bytes(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_directory(path, ec)) {
+    const auto n = fs::file_size(path, ec);
+    return ec ? 0 : n;
+  }
+  std::uint64_t total = 0;
+  for (const auto& e : fs::directory_iterator(path, ec))
+    if (e.is_regular_file(ec)) total += e.file_size(ec);
+  return total;
+}
+
+/// The child's data-segment limit: room for the decoded volume of these files (compressed pixel
+/// data expands; 32 × the files, at least 2 GiB) so that an allocation no file of this size can
+/// need fails in the child (an error) instead of taking the machine's memory. Not under the
+/// sanitizers, whose runtimes reserve terabytes.
+void limit_child_memory(std::uint64_t bytes) {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  (void)bytes;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || \
+    __has_feature(memory_sanitizer)
+  (void)bytes;
+#else
+  const std::uint64_t limit = std::max<std::uint64_t>(std::uint64_t{2} << 30, 32 * bytes);
+  const rlimit r{limit, limit};
+  ::setrlimit(RLIMIT_DATA, &r);
+#endif
+#else
+  const std::uint64_t limit = std::max<std::uint64_t>(std::uint64_t{2} << 30, 32 * bytes);
+  const rlimit r{limit, limit};
+  ::setrlimit(RLIMIT_DATA, &r);
+#endif
+}
+
 template <class Read>
-Volume isolated(const std::string& where, Read&& read) {
+Volume isolated(const std::string& where, std::uint64_t bytes, Read&& read) {
   int fds[2];
   if (::pipe2(fds, O_CLOEXEC) != 0) return read();
   void* shared = ::mmap(nullptr, sizeof(SharedNote), PROT_READ | PROT_WRITE,
@@ -432,6 +494,7 @@ Volume isolated(const std::string& where, Read&& read) {
                                   : ::open("/dev/null", O_WRONLY);
     if (err >= 0) ::dup2(err, 2);
     g_note = note;
+    limit_child_memory(bytes);
     Reply reply;
     std::string text;
     Volume v;
@@ -451,6 +514,11 @@ Volume isolated(const std::string& where, Read&& read) {
       reply.kind = 2;
       reply.status = static_cast<std::int32_t>(e.status());
       text = e.what();
+    } catch (const std::bad_alloc&) {
+      reply.kind = 2;
+      reply.status = static_cast<std::int32_t>(Status::invalid_input);
+      text = std::string(note->file[0] ? note->file : where.c_str()) +
+             ": the DICOM data asks for more memory than files of this size can need (corrupt?)";
     } catch (const std::exception& e) {
       reply.kind = 2;
       reply.status = static_cast<std::int32_t>(Status::invalid_input);
@@ -827,11 +895,19 @@ Volume read_dicom_in_process(const std::string& path, const std::string& series_
 
 Volume read_dicom_series(const std::vector<std::string>& files, const std::string& where,
                          const std::string& series_uid) {
-  return isolated(where, [&] { return read_series_in_process(files, where, series_uid); });
+  std::uint64_t bytes = 0;
+  for (const std::string& f : files) bytes += input_bytes(f);
+  return isolated(where, bytes, [&] { return read_series_in_process(files, where, series_uid); });
 }
 
 Volume read_dicom(const std::string& path, const std::string& series_uid) {
-  return isolated(path, [&] { return read_dicom_in_process(path, series_uid); });
+  // A named slice reads its folder's series.
+  std::error_code ec;
+  const std::string folder = fs::is_directory(path, ec) || fs::path(path).parent_path().empty()
+                                 ? (fs::is_directory(path, ec) ? path : std::string("."))
+                                 : fs::path(path).parent_path().string();
+  return isolated(path, input_bytes(folder),
+                  [&] { return read_dicom_in_process(path, series_uid); });
 }
 
 }  // namespace adamesh::detail
