@@ -365,6 +365,8 @@ void quiet_gdcm() {
 // conversion) runs in a forked child that sends the volume, or the Error it threw, through a
 // pipe; a child killed by a signal becomes one error line naming the file GDCM was working on,
 // and the child's stderr goes to /dev/null. Without fork (it failed), the read runs here.
+// The child runs only this file's code, GDCM and its codecs: no oneTBB (a forked child has
+// none of the parent's worker threads, and a parallel loop there could wait for them forever).
 
 struct SharedNote {
   char file[4096];
