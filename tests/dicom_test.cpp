@@ -357,6 +357,20 @@ TEST(Dicom, GantryTiltAndUnevenSpacingAreRefused) {
   }
 }
 
+TEST(Dicom, TrailingPaddingIsAccepted) {
+  // The structure walk (dicom.cpp) refuses what GDCM would misread, but not a tail of zeros or
+  // a few stray bytes after the last element, which some writers leave and GDCM reads past.
+  TempDir tmp;
+  const Volume src = head();
+  for (const std::string& tail : {std::string(64, '\0'), std::string("\x01\x02\x03", 3)}) {
+    const std::string dir = tmp.file("pad" + std::to_string(tail.size()));
+    write_series(src, dir);
+    for (const auto& e : fs::directory_iterator(dir))
+      testutil::write_bytes(e.path().string(), testutil::read_bytes(e.path().string()) + tail);
+    expect_same_geometry_and_samples(read_volume(dir), src);
+  }
+}
+
 TEST(Dicom, ACrashInsideGdcmIsAnErrorNamingTheSlice) {
   // GDCM 3.0.21 divides by zero (SIGFPE) on an RLE fragment whose header announces 0 segments;
   // fuzz_dicom also found an out-of-bounds read in its JPEG 2000 header parser. The DICOM read

@@ -162,6 +162,19 @@ class StructureWalk {
       if (v[0] == l[0] && v[1] == l[1]) return true;
     return false;
   }
+  /// True when [pos, end) is shorter than an element header or holds only zero bytes.
+  bool zeros_or_short_tail(std::uint64_t pos, std::uint64_t end) {
+    if (end - pos < 8) return true;
+    unsigned char b[4096];
+    for (std::uint64_t at = pos; at < end;) {
+      const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(sizeof b, end - at));
+      if (!read_at(at, b, n)) return false;
+      for (std::size_t i = 0; i < n; ++i)
+        if (b[i] != 0) return false;
+      at += n;
+    }
+    return true;
+  }
   static std::string tag_name(unsigned group, unsigned element) {
     char t[16];
     std::snprintf(t, sizeof t, "(%04x,%04x)", group, element);
@@ -217,6 +230,9 @@ class StructureWalk {
                        bool until_delimiter = false) {
     if (depth > kMaxDepth) return "sequences nested more than " + std::to_string(kMaxDepth) + " deep";
     while (pos < end) {
+      // Trailing bytes after the last element of the data set — fewer than an element header,
+      // or zeros (padding some writers leave) — are left to GDCM, as it reads them.
+      if (depth == 0 && !until_delimiter && zeros_or_short_tail(pos, end)) return "";
       unsigned char b[12];
       if (pos + 8 > end || !read_at(pos, b, 8))
         return "element at byte " + std::to_string(pos) + " cut short";
