@@ -298,6 +298,13 @@ class StructureWalk {
       if (length > end - pos)
         return "element " + tag + " declares " + std::to_string(length) + " bytes, " +
                std::to_string(end - pos) + " are left";
+      if (group == 0x0028 && element == 0x0002 && length == 2) {
+        // GDCM asserts SamplesPerPixel ∈ {1, 3, 4} (gdcmPixelFormat.h:94; fuzz_dicom hit it
+        // hundreds of times): the process would abort.
+        unsigned char v[2];
+        if (read_at(pos, v, 2) && u16(v) != 1 && u16(v) != 3 && u16(v) != 4)
+          return "SamplesPerPixel (0028,0002) is " + std::to_string(u16(v)) + " (1, 3 or 4)";
+      }
       if (sequence) {
         std::uint64_t inner = pos;
         if (std::string p = items(inner, pos + length, explicit_vr && !implicit_inside, true,
