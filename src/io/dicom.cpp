@@ -21,6 +21,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <csignal>
 #include <cmath>
@@ -395,6 +396,7 @@ struct SharedNote {
   char file[4096];
 };
 SharedNote* g_note = nullptr;  // set in the child only
+std::atomic<std::uint64_t> g_child_failures{0};
 
 /// Records which file GDCM is about to work on, for the parent's message if the child dies.
 void note_gdcm_work(const std::string& what) {
@@ -584,6 +586,7 @@ Volume isolated(const std::string& where, std::uint64_t bytes, Read&& read) {
   std::string file = note->file;
   ::munmap(shared, sizeof(SharedNote));
   if (!complete) {
+    g_child_failures.fetch_add(1, std::memory_order_relaxed);
     if (file.empty()) file = where;
     if (WIFSIGNALED(wstatus))
       fail_input(file, std::string("GDCM crashed reading this DICOM data (") +
@@ -598,6 +601,10 @@ Volume isolated(const std::string& where, std::uint64_t bytes, Read&& read) {
 }  // namespace
 
 bool is_dicom_file(const std::string& path) { return has_dicom_magic(path); }
+
+std::uint64_t dicom_child_failures() noexcept {
+  return g_child_failures.load(std::memory_order_relaxed);
+}
 
 namespace {
 

@@ -3,6 +3,7 @@
 // format and source set, or throws Error(invalid_input | unsupported, "<path>: <problem>").
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -27,5 +28,8 @@ Volume read_dicom_series(const std::vector<std::string>& files, const std::strin
                          const std::string& series_uid);
 /// True when the file has the DICOM Part 10 preamble ("DICM" at byte 128).
 bool is_dicom_file(const std::string& path);
+/// DICOM reads whose child process died without a result, since the start (fuzz_dicom's triage
+/// counts them: an error message can contain any text the files hold).
+std::uint64_t dicom_child_failures() noexcept;
 
 }  // namespace adamesh::detail
