@@ -21,7 +21,12 @@ for n in "${names[@]}"; do
   wall=0 cpu=0 execs=0 rc=0
   while :; do
     chunk=${FUZZ_SECONDS:-60}
-    [ -n "${FUZZ_CPU_SECONDS:-}" ] && chunk=60
+    # With a CPU budget: 60 s chunks, the last one only as long as what is left (at least 10 s).
+    if [ -n "${FUZZ_CPU_SECONDS:-}" ]; then
+      chunk=$((FUZZ_CPU_SECONDS - cpu))
+      [ "$chunk" -gt 60 ] && chunk=60
+      [ "$chunk" -lt 10 ] && chunk=10
+    fi
     # -malloc_limit_mb: any single allocation above 2 GiB is a finding (the readers check sizes
     # against the file before allocating); -timeout: an input taking 10 s is a hang.
     TIMEFORMAT='%U %S'
