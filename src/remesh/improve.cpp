@@ -9,11 +9,12 @@
 //      triangles' ideal apexes (the point that makes the opposite edge's triangle equilateral, in
 //      that triangle's plane), tangentially, then is projected onto the iso-surface; the move is
 //      kept only when the smallest angle around the vertex rises and no triangle turns over
-//      (step λ = 1, ½, ¼);
+//      (step λ = 1, ½, ¼; a vertex with a ring triangle under 20° may travel ¾ of its mean edge
+//      length, others — and every vertex of M0 — ¾ of their shortest edge);
 //   3. collapses: a needle (smallest angle below `collapse_below_deg`, shortest edge under half
 //      the next) loses its shortest edge when the link condition holds (the two ends share only
-//      the two opposite vertices, both of valence > 3), the merged vertex projects onto the
-//      surface and the smallest angle around it rises.
+//      the two opposite vertices, both of valence > 3) and the smallest angle around the merged
+//      vertex rises with it at the projected midpoint or at either end (the best of the three).
 // Flips and link-condition collapses keep the surface's topology; moves keep the connectivity.
 // Everything is serial and visits elements in a fixed order, so the result is deterministic.
 #include "adamesh/improve.h"
@@ -22,6 +23,7 @@
 #include "adamesh/context.h"
 
 #include <algorithm>
+#include <optional>
 #include <iterator>
 #include <array>
 #include <cmath>
@@ -44,10 +46,14 @@ constexpr double kDeg = std::numbers::pi / 180;
 /// The refinement's bound on a triangle is 1.25 × its sampled error (its samples can miss the
 /// worst point); the same margin here.
 constexpr double kErrorSafety = 1.25;
+/// Vertices with a ring triangle under this (degrees) may move as far as their mean edge length.
+constexpr double kWideMoveBelowDeg = 20;
 /// Decimation makes no triangle with a smaller angle than this (degrees) unless one was there.
 constexpr double kDecimateMinAngle = 15;
 /// Untangling moves make no triangle below this (degrees) unless its ring had one.
 constexpr double kUntangleMinAngle = 20;
+/// Untangling moves make no edge shorter than this many voxels.
+constexpr double kUntangleMinEdge = 0.01;
 
 double angle_at(const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 u = b - a, v = c - a;
@@ -116,6 +122,9 @@ class Improver {
     has_box_ = o_.box.hi.x > o_.box.lo.x;
     mark_boundary_vertices();
   }
+
+  /// M0: every move stays under ¾ of the shortest incident edge (anchors stay valid).
+  void keep_moves_small() { small_moves_ = true; }
 
   ImproveStats run() {
     ImproveStats st;
@@ -194,6 +203,7 @@ class Improver {
   mutable StageTicker tick_;
   double dev_ = 0;
   bool has_box_ = false;
+  bool small_moves_ = false;  ///< M0: every move under ¾ of the shortest incident edge
   std::vector<Vec3> p_;
   std::vector<Tri> t_;
   std::vector<std::uint8_t> fixed_, boundary_, tri_alive_;
@@ -394,6 +404,9 @@ class Improver {
           // Half way, else all the way, and not into slivers (CT head at 20k, 943 pairs: full
           // umbrella alone 55 pairs but 1.6 % of triangles under 20° instead of 0.96 %; half
           // way with a 20° guard 141 pairs at 0.80 %).
+          // Nor into specks: moving every vertex of a tiny closed component to the mean of its
+          // neighbours shrinks it (a 4-vertex speck on ct_lidc2_chest went to one point in float).
+          const double floor_len = kUntangleMinEdge * o_.voxel;
           auto ring_ok = [&](const Vec3& c) {
             double before = std::numbers::pi, after = std::numbers::pi;
             for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
@@ -401,7 +414,11 @@ class Improver {
               before = std::min(before, tri_min_angle(u));
               Vec3 x[3] = {p_[u[0]], p_[u[1]], p_[u[2]]};
               for (int j = 0; j < 3; ++j)
-                if (u[j] == v) x[j] = c;
+                if (u[j] == v) {
+                  if (distance(c, x[(j + 1) % 3]) < floor_len || distance(c, x[(j + 2) % 3]) < floor_len)
+                    return false;
+                  x[j] = c;
+                }
               after = std::min(after, min_angle(x[0], x[1], x[2]));
             }
             return after >= std::min(before, kUntangleMinAngle * kDeg);
@@ -710,6 +727,19 @@ class Improver {
     }
     n = normalized(n);
     if (norm2(n) == 0) return false;
+    // A vertex with a triangle under 20° may travel up to ¾ of the mean length of its edges
+    // instead of ¾ of the shortest (not on M0, whose anchors must stay valid starting points): at a cluster of vertices a few hundredths of a voxel apart (a tiny
+    // handle or neck of the trilinear surface, whose edges the link condition keeps from
+    // collapsing) the short cap let a move grow the cluster's edges by only ¾ per pass (CT head
+    // at 20k: 0.75 → 0.56 % under 20°, smallest angle 0.16° → 1.5°; docs/QUALITY.md).
+    if (!small_moves_ && old_min < kWideMoveBelowDeg * kDeg) {
+      double lsum = 0;
+      for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
+        const Tri& t = t_[inc_[i]];
+        lsum += distance(pv, p_[t[t[0] == v ? 1 : t[1] == v ? 2 : 0]]);
+      }
+      lmin = std::max(lmin, lsum / (inc_off_[v + 1] - inc_off_[v]));
+    }
     for (double lambda : {1.0, 0.5, 0.25}) {
       Vec3 q = pv + lambda * (goal - pv);
       q -= dot(q - pv, n) * n;
@@ -746,6 +776,7 @@ class Improver {
                           plan[i].move = plan_move(todo[i], plan[i].q);
                       });
     std::vector<std::uint8_t> stale(nv, 0);  // a neighbour moved in this pass
+    std::vector<std::pair<std::uint32_t, Vec3>> wide;  // long moves and their old positions
     std::size_t moves = 0, next = 0;
     for (std::uint32_t v = 0; v < nv; ++v) {
       // Only vertices whose neighbourhood changed since they were last looked at.
@@ -758,13 +789,75 @@ class Improver {
       const bool move = planned && !stale[v] ? plan[i].move != 0 : plan_move(v, q);
       if (!move) continue;
       if (planned && !stale[v]) q = plan[i].q;
+      if (!small_moves_ && distance(q, p_[v]) > 0.75 * shortest_edge(v) + 1e-12)
+        wide.push_back({v, p_[v]});
       p_[v] = q;
       mark_ring_dirty(v);
       for (std::uint32_t k = inc_off_[v]; k < inc_off_[v + 1]; ++k)
         for (auto u : t_[inc_[k]]) stale[u] = 1;
       ++moves;
     }
-    return moves;
+    return moves - undo_crossing_moves(wide);
+  }
+
+  double shortest_edge(std::uint32_t v) const {
+    double l = std::numeric_limits<double>::max();
+    for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
+      const Tri& t = t_[inc_[i]];
+      for (auto u : t)
+        if (u != v) l = std::min(l, distance(p_[v], p_[u]));
+    }
+    return l;
+  }
+
+  /// Undoes the long moves (beyond ¾ of the shortest edge) of a pass that made triangles
+  /// intersect: pairs with a triangle around such a vertex that did not intersect before the
+  /// pass send the vertex back, until no new pair is left. Returns the moves undone. (The long
+  /// moves spread the vertex clusters at tiny handles, and there the surface's sheets are close:
+  /// unguarded, they added 60 % to the MRI head's crossing pairs at 20k.)
+  std::size_t undo_crossing_moves(const std::vector<std::pair<std::uint32_t, Vec3>>& from) {
+    if (from.empty()) return 0;
+    using PairList = std::vector<std::pair<std::uint32_t, std::uint32_t>>;
+    std::vector<std::uint32_t> id;
+    Mesh m = snapshot(id);
+    std::vector<std::uint32_t> tri_of(t_.size(), UINT32_MAX);  // t_ index -> mesh triangle
+    for (std::uint32_t i = 0; i < id.size(); ++i) tri_of[id[i]] = i;
+    std::vector<std::uint8_t> involved(m.num_triangles(), 0);
+    for (const auto& [v, old] : from)
+      for (std::uint32_t k = inc_off_[v]; k < inc_off_[v + 1]; ++k) involved[tri_of[inc_[k]]] = 1;
+    auto set = [&](std::uint32_t v, const Vec3& q) {
+      p_[v] = q;
+      for (int k = 0; k < 3; ++k) m.positions[3 * v + k] = static_cast<float>(q[k]);
+    };
+    std::vector<Vec3> now(from.size());
+    for (std::size_t i = 0; i < from.size(); ++i) now[i] = p_[from[i].first];
+    for (const auto& [v, old] : from) set(v, old);
+    const std::optional<PairList> before = intersecting_pairs_involving(m, involved, ctx_);
+    for (std::size_t i = 0; i < from.size(); ++i) set(from[i].first, now[i]);
+    if (!before) return 0;
+    std::vector<std::int32_t> slot(p_.size(), -1);
+    for (std::size_t i = 0; i < from.size(); ++i) slot[from[i].first] = static_cast<std::int32_t>(i);
+    std::vector<std::uint8_t> undone(from.size(), 0);
+    std::size_t count = 0;
+    for (int iter = 0; iter < 32; ++iter) {
+      const std::optional<PairList> after = intersecting_pairs_involving(m, involved, ctx_);
+      if (!after) break;
+      bool any = false;
+      for (const auto& pr : *after) {
+        if (std::binary_search(before->begin(), before->end(), pr)) continue;
+        for (auto t : {pr.first, pr.second})
+          for (auto v : t_[id[t]])
+            if (slot[v] >= 0 && !undone[slot[v]]) {
+              undone[slot[v]] = 1;
+              set(v, from[slot[v]].second);
+              mark_ring_dirty(v);
+              ++count;
+              any = true;
+            }
+      }
+      if (!any) break;
+    }
+    return count;
   }
 
   /// A free vertex of `tri` with three triangles around it is removed and the three become one
@@ -827,8 +920,8 @@ class Improver {
   };
 
   /// The tests of collapsing edge ab (b into a; a is not fixed unless b is, see try_collapse)
-  /// except the busy marks: the link condition, the merged point q (projected midpoint, or a
-  /// when a is fixed), no triangle turned over, the smallest angle, the error bound. Reads the
+  /// except the busy marks: the link condition, the merged point q (projected midpoint, a or b,
+  /// the best-shaped that passes; a when a is fixed), no triangle turned over, the smallest angle, the error bound. Reads the
   /// mesh only; leaves a's and b's neighbours and their common ones in `r`.
   bool collapse_ok(std::uint32_t a, std::uint32_t b, bool must_improve, double min_after, Vec3& q,
                    Rings& r) const {
@@ -840,15 +933,42 @@ class Improver {
     if (r.common.size() != 2) return false;  // link condition
     for (auto c : r.common)
       if (inc_off_[c + 1] - inc_off_[c] <= 3) return false;
+    // Where the merged vertex goes: the projected midpoint, else a's or b's own place (both on
+    // the surface already), whichever leaves the best smallest angle; a fixed a stays.
     const double len = distance(p_[a], p_[b]);
-    q = fixed_[a] ? p_[a] : 0.5 * (p_[a] + p_[b]);
-    if (!fixed_[a] && !project(q, std::max(0.5 * len, o_.voxel))) return false;
-    // The triangles around a and b, except the two on ab, with both ends at q.
-    double old_min = std::numbers::pi, new_min = std::numbers::pi;
+    std::array<Vec3, 3> at{};
+    int n_at = 0;
+    if (fixed_[a]) {
+      at[n_at++] = p_[a];
+    } else {
+      Vec3 m = 0.5 * (p_[a] + p_[b]);
+      if (project(m, std::max(0.5 * len, o_.voxel))) at[n_at++] = m;
+      at[n_at++] = p_[a];
+      at[n_at++] = p_[b];
+    }
+    double old_min = std::numbers::pi;
+    for (auto v : {a, b})
+      for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i)
+        old_min = std::min(old_min, tri_min_angle(t_[inc_[i]]));
+    double best = -1;
+    for (int c = 0; c < n_at; ++c) {
+      const double new_min = merged_min_angle(a, b, at[c]);
+      if (new_min <= best) continue;
+      if (must_improve ? new_min <= old_min : new_min < std::min(old_min, min_after)) continue;
+      if (!ring_error_ok(a, at[c]) || !ring_error_ok(b, at[c])) continue;
+      best = new_min;
+      q = at[c];
+    }
+    return best >= 0;
+  }
+
+  /// Smallest angle of the triangles around a and b, except the two on ab, with both ends at q;
+  /// -1 when one of them turns over.
+  double merged_min_angle(std::uint32_t a, std::uint32_t b, const Vec3& q) const {
+    double new_min = std::numbers::pi;
     for (auto v : {a, b}) {
       for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
         const Tri& u = t_[inc_[i]];
-        old_min = std::min(old_min, tri_min_angle(u));
         const bool has_a = u[0] == a || u[1] == a || u[2] == a;
         const bool has_b = u[0] == b || u[1] == b || u[2] == b;
         if (has_a && has_b) continue;
@@ -856,12 +976,11 @@ class Improver {
         const Vec3 n_old = normalized(tri_normal(c0, c1, c2));
         for (int j = 0; j < 3; ++j)
           if (u[j] == a || u[j] == b) (j == 0 ? c0 : j == 1 ? c1 : c2) = q;
-        if (dot(n_old, normalized(tri_normal(c0, c1, c2))) < 0.35) return false;
+        if (dot(n_old, normalized(tri_normal(c0, c1, c2))) < 0.35) return -1;
         new_min = std::min(new_min, min_angle(c0, c1, c2));
       }
     }
-    if (must_improve ? new_min <= old_min : new_min < std::min(old_min, min_after)) return false;
-    return ring_error_ok(a, q) && ring_error_ok(b, q);
+    return new_min;
   }
 
   /// Which end of ab is kept: a, unless only b is fixed. False when the edge may not collapse
@@ -893,7 +1012,7 @@ class Improver {
     busy[a] = busy[b] = 1;
   }
 
-  /// Collapses edge ab (b into a, at their projected midpoint, or at a when a is fixed) when the
+  /// Collapses edge ab (b into a, at their projected midpoint, a or b, or at a when a is fixed) when the
   /// link condition holds, no triangle turns over, and the smallest angle around the merged
   /// vertex is above `min_after` (radians) — or, with `must_improve`, above the smallest angle
   /// before. Nothing within the rings of busy vertices; marks the touched vertices busy.
@@ -1047,6 +1166,7 @@ ImproveStats improve_base_mesh(BaseMesh& base, const ScalarField* field, double 
   if (base.mesh.num_triangles() == 0) return st;
   in_arena(context, [&] {
     Improver imp(base.mesh, base.border, field, iso, options, context, "improve M0");
+    imp.keep_moves_small();
     const std::size_t removed = decimate_to > 0 ? imp.decimate(decimate_to) : 0;
     st = imp.run();
     st.decimated = removed;
