@@ -728,10 +728,11 @@ class Improver {
     n = normalized(n);
     if (norm2(n) == 0) return false;
     // A vertex with a triangle under 20° may travel up to ¾ of the mean length of its edges
-    // instead of ¾ of the shortest (not on M0, whose anchors must stay valid starting points): at a cluster of vertices a few hundredths of a voxel apart (a tiny
-    // handle or neck of the trilinear surface, whose edges the link condition keeps from
-    // collapsing) the short cap let a move grow the cluster's edges by only ¾ per pass (CT head
-    // at 20k: 0.75 → 0.56 % under 20°, smallest angle 0.16° → 1.5°; docs/QUALITY.md).
+    // instead of ¾ of the shortest (not on M0, whose anchors must stay valid starting points):
+    // at a cluster of vertices a few hundredths of a voxel apart (a tiny handle or neck of the
+    // trilinear surface, whose edges the link condition keeps from collapsing) the short cap let
+    // a move grow the cluster's edges by only ¾ per pass (CT head at 20k: 0.75 → 0.67 % under
+    // 20°, smallest angle 0.16° → 1.5°; docs/QUALITY.md).
     if (!small_moves_ && old_min < kWideMoveBelowDeg * kDeg) {
       double lsum = 0;
       for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
