@@ -68,6 +68,8 @@ class StageTicker {
   void set_fraction(double fraction) {
     fraction_ = fraction < 0 ? 0 : fraction > 1 ? 1 : fraction;
   }
+  /// Checks cancellation and reports the last fraction (throttled) now, whatever the count.
+  void check() { poll(fraction_); }
   /// Checks cancellation and reports `fraction` (throttled) now, whatever the count.
   void poll(double fraction) {
     count_ = 0;

@@ -148,6 +148,9 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
                                    const ExecutionContext& context) {
   const std::size_t nt = mesh.num_triangles();
   if (nt < 2) return PairList{};
+  // Cancellation (a count over a million triangles takes about a second): checked between the
+  // phases on the calling thread; the pair-test workers stop early and the throw comes after.
+  context.check_cancelled();
   auto tri = [&](std::size_t t) -> std::array<std::uint32_t, 3> {
     return {mesh.triangles[3 * t], mesh.triangles[3 * t + 1], mesh.triangles[3 * t + 2]};
   };
@@ -237,6 +240,7 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
     std::vector<std::uint8_t> hit(nt, 0);
     detail::with_threads(context, [&] {
       detail::for_chunks(nt, [&](std::size_t t0, std::size_t t1) {
+        if (context.cancelled()) return;
         for (std::size_t t = t0; t < t1; ++t) {
           bool h = (*involved)[t] != 0;
           if (!h) for_each_cell(t, [&](std::uint64_t c) { return h = is_active(c); });
@@ -253,6 +257,7 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
   // Duplicate triangles (same vertex set) are listed once: they are a topology finding, and a
   // pile of copies would make the pair tests quadratic. Copies share their box, so a candidate's
   // copies are candidates too.
+  context.check_cancelled();
   std::vector<std::uint32_t> listed;
   {
     std::vector<std::pair<std::array<std::uint32_t, 3>, std::uint32_t>> keys(candidates.size());
@@ -273,6 +278,7 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
       if (!involved || is_active(c)) entries.push_back({c, t});
       return false;
     });
+  context.check_cancelled();
   tbb::parallel_sort(entries.begin(), entries.end());
   std::vector<std::size_t> starts;
   for (std::size_t i = 0; i < entries.size(); ++i)
@@ -288,9 +294,11 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
     tests += m * (m - 1) / 2;
   }
   if (tests > 64 * nt + 10'000'000) return std::nullopt;
+  context.check_cancelled();
   std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> found(cells);
   detail::with_threads(context, [&] {
     detail::for_chunks(cells, [&](std::size_t c0, std::size_t c1) {
+      if (context.cancelled()) return;
       for (std::size_t c = c0; c < c1; ++c) {
         const std::uint64_t id = entries[starts[c]].first;
         const std::int64_t cx = static_cast<std::int64_t>(id % dims[0]),
@@ -343,6 +351,7 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
       }
     }, 64);
   });
+  context.check_cancelled();
   PairList pairs;
   for (auto& f : found) pairs.insert(pairs.end(), f.begin(), f.end());
   tbb::parallel_sort(pairs.begin(), pairs.end());

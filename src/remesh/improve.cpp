@@ -198,7 +198,7 @@ class Improver {
   const ScalarField* field_;
   double iso_;
   ImproveOptions o_;
-  const ExecutionContext& ctx_;  ///< threads of the intersection counts
+  const ExecutionContext& ctx_;  ///< threads of the intersection counts, cancellation inside parallel loops
   /// Cancellation and progress inside the passes (mutable: the const edge walk ticks too).
   mutable StageTicker tick_;
   double dev_ = 0;
@@ -348,6 +348,7 @@ class Improver {
   /// moved vertex are tested again (the connectivity does not change here).
   void untangle(ImproveStats& st) {
     using PairList = std::vector<std::pair<std::uint32_t, std::uint32_t>>;
+    tick_.check();
     std::vector<std::uint32_t> id;  // mesh triangle -> t_ index
     Mesh m = snapshot(id);
     PairList pairs;  // in mesh triangle indices
@@ -372,6 +373,7 @@ class Improver {
     };
     int ring = 0;
     for (int round = 0; round < 16 && cur > 0; ++round) {
+      tick_.check();  // a round over a large mesh takes a tenth of a second or more
       build_incidence();
       std::vector<std::uint8_t> sel(p_.size(), 0);
       for (const auto& [a, b] : pairs)
@@ -393,6 +395,7 @@ class Improver {
       tbb::enumerable_thread_specific<std::vector<std::uint32_t>> nbrs;
       tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, static_cast<std::uint32_t>(p_.size()), 512),
                         [&](const tbb::blocked_range<std::uint32_t>& r) {
+        if (ctx_.cancelled()) return;  // thrown by the check after the loop
         std::vector<std::uint32_t>& na = nbrs.local();
         for (std::uint32_t v = r.begin(); v != r.end(); ++v) {
           if (!sel[v] || fixed_[v] || boundary_[v] || inc_off_[v] == inc_off_[v + 1]) continue;
@@ -431,6 +434,7 @@ class Improver {
           dest[v] = q;
         }
       });
+      tick_.check();
       std::vector<std::pair<std::uint32_t, Vec3>> moves;
       for (std::uint32_t v = 0; v < p_.size(); ++v)
         if (go[v]) moves.push_back({v, dest[v]});
@@ -501,6 +505,7 @@ class Improver {
       std::vector<std::uint32_t> order(cands.size());
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cands.size(), 1024),
                         [&](const tbb::blocked_range<std::size_t>& r) {
+                          if (ctx_.cancelled()) return;
                           for (std::size_t i = r.begin(); i != r.end(); ++i) {
                             Cand& c = cands[i];
                             const Vec3& a = p_[t_[c.t1][c.k1]];
@@ -512,6 +517,7 @@ class Improver {
                             order[i] = static_cast<std::uint32_t>(i);
                           }
                         });
+      tick_.check();
       tbb::parallel_sort(order.begin(), order.end(), [&](std::uint32_t x, std::uint32_t y) {
         return cands[x].key != cands[y].key ? cands[x].key > cands[y].key : x < y;
       });
@@ -646,10 +652,12 @@ class Improver {
     std::vector<std::uint8_t> ok(edges.size(), 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edges.size(), 512),
                       [&](const tbb::blocked_range<std::size_t>& r) {
+                        if (ctx_.cancelled()) return;
                         for (std::size_t i = r.begin(); i != r.end(); ++i)
                           ok[i] = flip_ok(edges[i].t1, edges[i].k1, edges[i].t2, edges[i].k2,
                                           existing);
                       });
+    tick_.check();
     std::unordered_set<std::uint64_t> added;
     std::vector<std::uint8_t> touched(t_.size(), 0);
     std::size_t flips = 0;
@@ -773,9 +781,11 @@ class Improver {
     std::vector<Plan> plan(todo.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, todo.size(), 256),
                       [&](const tbb::blocked_range<std::size_t>& r) {
+                        if (ctx_.cancelled()) return;
                         for (std::size_t i = r.begin(); i != r.end(); ++i)
                           plan[i].move = plan_move(todo[i], plan[i].q);
                       });
+    tick_.check();
     std::vector<std::uint8_t> stale(nv, 0);  // a neighbour moved in this pass
     std::vector<std::pair<std::uint32_t, Vec3>> wide;  // long moves and their old positions
     std::size_t moves = 0, next = 0;
@@ -1095,6 +1105,7 @@ class Improver {
         const std::size_t e1 = std::min(edges.size(), e0 + kBlock);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(e0, e1, 16),
                           [&](const tbb::blocked_range<std::size_t>& r) {
+                            if (ctx_.cancelled()) return;
                             Rings& local = rings.local();
                             for (std::size_t i = r.begin(); i != r.end(); ++i) {
                               Plan& pl = plans[i - e0];
@@ -1105,6 +1116,7 @@ class Improver {
                                                   local);
                             }
                           });
+        tick_.check();
         for (std::size_t i = e0; i < e1 && done < need; ++i) {
           tick_.tick();
           const Plan& pl = plans[i - e0];
