@@ -59,7 +59,9 @@ TEST_P(ScanTest, BudgetTopologyBoxAndShape) {
   const Mesh a = read_mesh(tmp.file("a.ply"));
   // The budget holds within 1 % (smaller when the surface is too small for it: the size limit).
   EXPECT_LE(a.num_triangles(), n);
-  if (mc.num_triangles() > 2 * n) EXPECT_GE(a.num_triangles(), n - n / 100);
+  if (mc.num_triangles() > 2 * n) {
+    EXPECT_GE(a.num_triangles(), n - n / 100);
+  }
   // Marching cubes' topology.
   const auto ta = mesh_topo(a), tm = mesh_topo(mc);
   EXPECT_EQ(ta.chi, tm.chi);
