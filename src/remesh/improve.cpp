@@ -198,7 +198,7 @@ class Improver {
   const ScalarField* field_;
   double iso_;
   ImproveOptions o_;
-  const ExecutionContext& ctx_;  ///< threads of the intersection counts, cancellation inside parallel loops
+  const ExecutionContext& ctx_;  ///< threads of the intersection counts, cancellation inside parallel_ranges
   /// Cancellation and progress inside the passes (mutable: the const edge walk ticks too).
   mutable StageTicker tick_;
   double dev_ = 0;
@@ -336,6 +336,18 @@ class Improver {
     return m;
   }
 
+  /// tbb::parallel_for over [begin, end) in ranges of `grain`: body(range) on each, the ranges
+  /// left once the cancel flag is set skipped, and the cancellation thrown after the loop, on
+  /// this thread (an uncancellable plan over a million vertices held a cancel for 1.6 s).
+  template <class Index, class Body>
+  void parallel_ranges(Index begin, Index end, Index grain, Body&& body) const {
+    tbb::parallel_for(tbb::blocked_range<Index>(begin, end, grain),
+                      [&](const tbb::blocked_range<Index>& r) {
+                        if (!ctx_.cancelled()) body(r);
+                      });
+    tick_.check();
+  }
+
   /// Removes self-intersections where it can (issue 13): the vertices of intersecting triangles
   /// move half way to the mean of their neighbours (a fold or a crossing made by placements on a
   /// noisy surface unfolds; projecting back onto the surface folds it again: where two sheets of
@@ -393,9 +405,8 @@ class Improver {
       std::vector<std::uint8_t> go(p_.size(), 0);
       std::vector<Vec3> dest(p_.size());
       tbb::enumerable_thread_specific<std::vector<std::uint32_t>> nbrs;
-      tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, static_cast<std::uint32_t>(p_.size()), 512),
-                        [&](const tbb::blocked_range<std::uint32_t>& r) {
-        if (ctx_.cancelled()) return;  // thrown by the check after the loop
+      parallel_ranges<std::uint32_t>(0, static_cast<std::uint32_t>(p_.size()), 512,
+                                     [&](const tbb::blocked_range<std::uint32_t>& r) {
         std::vector<std::uint32_t>& na = nbrs.local();
         for (std::uint32_t v = r.begin(); v != r.end(); ++v) {
           if (!sel[v] || fixed_[v] || boundary_[v] || inc_off_[v] == inc_off_[v + 1]) continue;
@@ -434,7 +445,6 @@ class Improver {
           dest[v] = q;
         }
       });
-      tick_.check();
       std::vector<std::pair<std::uint32_t, Vec3>> moves;
       for (std::uint32_t v = 0; v < p_.size(); ++v)
         if (go[v]) moves.push_back({v, dest[v]});
@@ -503,9 +513,8 @@ class Improver {
       // Keys in parallel (a distance estimate per edge), then a total order: key, then the edge
       // walk's order (issue 14: the same order as the serial stable sort).
       std::vector<std::uint32_t> order(cands.size());
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cands.size(), 1024),
+      parallel_ranges<std::size_t>(0, cands.size(), 1024,
                         [&](const tbb::blocked_range<std::size_t>& r) {
-                          if (ctx_.cancelled()) return;
                           for (std::size_t i = r.begin(); i != r.end(); ++i) {
                             Cand& c = cands[i];
                             const Vec3& a = p_[t_[c.t1][c.k1]];
@@ -517,7 +526,6 @@ class Improver {
                             order[i] = static_cast<std::uint32_t>(i);
                           }
                         });
-      tick_.check();
       tbb::parallel_sort(order.begin(), order.end(), [&](std::uint32_t x, std::uint32_t y) {
         return cands[x].key != cands[y].key ? cands[x].key > cands[y].key : x < y;
       });
@@ -678,14 +686,12 @@ class Improver {
       edges.push_back({t1, t2, k1, k2});
     });
     std::vector<std::uint8_t> ok(edges.size(), 0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edges.size(), 512),
+    parallel_ranges<std::size_t>(0, edges.size(), 512,
                       [&](const tbb::blocked_range<std::size_t>& r) {
-                        if (ctx_.cancelled()) return;
                         for (std::size_t i = r.begin(); i != r.end(); ++i)
                           ok[i] = flip_ok(edges[i].t1, edges[i].k1, edges[i].t2, edges[i].k2,
                                           existing);
                       });
-    tick_.check();
     std::unordered_set<std::uint64_t> added;
     std::vector<std::uint8_t> touched(t_.size(), 0);
     std::size_t flips = 0;
@@ -807,13 +813,11 @@ class Improver {
       std::uint8_t move;
     };
     std::vector<Plan> plan(todo.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, todo.size(), 256),
+    parallel_ranges<std::size_t>(0, todo.size(), 256,
                       [&](const tbb::blocked_range<std::size_t>& r) {
-                        if (ctx_.cancelled()) return;
                         for (std::size_t i = r.begin(); i != r.end(); ++i)
                           plan[i].move = plan_move(todo[i], plan[i].q);
                       });
-    tick_.check();
     std::vector<std::uint8_t> stale(nv, 0);  // a neighbour moved in this pass
     std::vector<std::pair<std::uint32_t, Vec3>> wide;  // long moves and their old positions
     std::size_t moves = 0, next = 0;
@@ -1131,9 +1135,8 @@ class Improver {
       Rings mine;
       for (std::size_t e0 = 0; e0 < edges.size() && done < need; e0 += kBlock) {
         const std::size_t e1 = std::min(edges.size(), e0 + kBlock);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(e0, e1, 16),
+        parallel_ranges<std::size_t>(e0, e1, 16,
                           [&](const tbb::blocked_range<std::size_t>& r) {
-                            if (ctx_.cancelled()) return;
                             Rings& local = rings.local();
                             for (std::size_t i = r.begin(); i != r.end(); ++i) {
                               Plan& pl = plans[i - e0];
@@ -1144,7 +1147,6 @@ class Improver {
                                                   local);
                             }
                           });
-        tick_.check();
         for (std::size_t i = e0; i < e1 && done < need; ++i) {
           tick_.tick();
           const Plan& pl = plans[i - e0];
