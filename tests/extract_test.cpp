@@ -13,6 +13,7 @@
 
 #include "adamesh/error.h"
 #include "adamesh/io.h"
+#include "adamesh/metrics.h"
 #include "error_status.h"
 #include "testing.h"
 
@@ -118,8 +119,9 @@ TEST(Extract, ReportsProgressInStageOrder) {
     if (stages.empty() || stages.back() != s) stages.push_back(s);
   };
   extract("shape:genus2", o);
-  const std::vector<std::string> want = {"read",   "surfels",    "graph",  "disk cover", "voronoi",
-                                         "dual",   "improve M0", "refine", "improve"};
+  const std::vector<std::string> want = {"read",       "surfels", "graph",   "disk cover",
+                                         "voronoi",    "dual",    "improve M0", "refine",
+                                         "improve",    "fit"};
   EXPECT_EQ(stages, want);
 }
 
@@ -227,4 +229,79 @@ TEST(Extract, FromBorrowedSamples) {
   tiny.type = ScalarType::f32;
   tiny.data = SampleBuffer(reinterpret_cast<std::byte*>(nan.data()), 32, nullptr);
   EXPECT_EQ(status_of([&] { make_input(std::move(tiny), "<array>"); }), Status::invalid_input);
+}
+
+// The least-squares fit (the default for adaptive meshes): against the same mesh with its
+// vertices on the surface, a lower RMS distance, no triangle sharper than min(its angle before,
+// 20°), no more intersecting pairs, every vertex in the volume's box, identical for 1 and 2
+// threads; --levels and --no-improve keep the hierarchy's placements.
+TEST(Extract, FitLowersTheErrorAndKeepsShapeCrossingsAndBox) {
+  struct Case {
+    std::string spec;
+    double iso;
+    std::size_t triangles;
+    double max_ratio;  // RMS with the fit / RMS on the surface
+  };
+  for (const Case& c : {Case{"shape:torus", 0.0, 3000, 0.6}, Case{head_path(), 500.5, 5000, 0.9}}) {
+    SCOPED_TRACE(c.spec);
+    InputOptions io;
+    io.resolution = 48;
+    const Input in = load_input(c.spec, io);
+    ExtractOptions o;
+    o.iso = c.iso;
+    o.budget = Budget::triangles;
+    o.triangles = c.triangles;
+    o.fit = ExtractOptions::Fit::surface;
+    const ExtractResult on = extract(in, o);
+    EXPECT_FALSE(on.report.fit.has_value());
+    o.fit = ExtractOptions::Fit::automatic;
+    o.context.threads = 1;
+    const ExtractResult fit = extract(in, o);
+    o.context.threads = 2;
+    EXPECT_EQ(extract(in, o).mesh.positions, fit.mesh.positions);
+    ASSERT_TRUE(fit.report.fit.has_value());
+    EXPECT_LT(fit.report.fit->rms_after, fit.report.fit->rms_before);
+    ASSERT_EQ(fit.mesh.triangles, on.mesh.triangles);  // the same connectivity, moved vertices
+    const double e_on = field_error(on.mesh, *in.field, c.iso).distance.rms;
+    const double e_fit = field_error(fit.mesh, *in.field, c.iso).distance.rms;
+    EXPECT_LT(e_fit, c.max_ratio * e_on) << e_on << " -> " << e_fit;
+    // Angles, triangle by triangle.
+    auto smallest = [](const Mesh& m, std::size_t t) {
+      double best = 180;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 a = m.vertex(m.triangles[3 * t + k]), b = m.vertex(m.triangles[3 * t + (k + 1) % 3]),
+                   d = m.vertex(m.triangles[3 * t + (k + 2) % 3]);
+        const Vec3 u = b - a, w = d - a;
+        best = std::min(best, std::atan2(norm(cross(u, w)), dot(u, w)) * 180 / 3.141592653589793);
+      }
+      return best;
+    };
+    std::size_t sharper = 0;
+    for (std::size_t t = 0; t < fit.mesh.num_triangles(); ++t) {
+      const double before = smallest(on.mesh, t), after = smallest(fit.mesh, t);
+      sharper += after < std::min(before, 20.0) - 1e-3;
+    }
+    EXPECT_EQ(sharper, 0u);
+    EXPECT_LE(quality(fit.mesh).pct_min_angle_below[1], quality(on.mesh).pct_min_angle_below[1]);
+    EXPECT_LE(self_intersections(fit.mesh).pairs, self_intersections(on.mesh).pairs);
+    const Box box = in.field->domain();
+    for (std::size_t v = 0; v < fit.mesh.num_vertices(); ++v)
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_GE(fit.mesh.vertex(v)[k], box.lo[k]);
+        EXPECT_LE(fit.mesh.vertex(v)[k], box.hi[k]);
+      }
+  }
+  // Uniform levels and --no-improve: the hierarchy's placements, not fitted.
+  ExtractOptions o;
+  o.budget = Budget::levels;
+  o.levels = 1;
+  InputOptions io;
+  io.resolution = 32;
+  EXPECT_FALSE(extract("shape:torus", o, io).report.fit.has_value());
+  o.budget = Budget::triangles;
+  o.triangles = 2000;
+  o.improve = false;
+  EXPECT_FALSE(extract("shape:torus", o, io).report.fit.has_value());
+  o.fit = ExtractOptions::Fit::l2;  // unless asked for
+  EXPECT_TRUE(extract("shape:torus", o, io).report.fit.has_value());
 }

@@ -56,9 +56,10 @@ std::vector<OptionSpec> extract_specs() {
        "topology control: cut handles and plug tunnels whose shortest loop is shorter than L "
        "voxels (strands thinner than L/pi; docs/TOPOLOGY.md)"},
       {"--fit", true,
-       "vertex positions of the written mesh: 'surface' (on the iso-surface, the default) or "
-       "'l2' (least-squares offsets along the normals: error on both sides of the surface, "
-       "lower RMS; docs/QUALITY.md)"},
+       "vertex positions of the written mesh: 'l2' (least-squares offsets along the normals: "
+       "error on both sides of the surface, lower RMS; docs/QUALITY.md), 'surface' (on the "
+       "iso-surface, as the .amh's cuts have them) or 'auto' (the default: l2 for adaptive "
+       "meshes, surface for --levels and --no-improve)"},
       {"--no-improve", false,
        "no shape improvement of M0 and of the written mesh (flips, moves, collapses; "
        "docs/QUALITY.md): the output is the hierarchy's cut as it is"},
@@ -112,8 +113,11 @@ ExtractOptions extract_options(const Args& args, const std::string& spec) {
   opt.improve = !args.has("--no-improve");
   if (auto f = args.get("--fit")) {
     if (*f == "l2") opt.fit = ExtractOptions::Fit::l2;
-    else if (*f != "surface")
-      fail(Status::usage, "adamesh extract: --fit must be 'surface' or 'l2', not '" + *f + "'");
+    else if (*f == "surface") opt.fit = ExtractOptions::Fit::surface;
+    else if (*f == "auto") opt.fit = ExtractOptions::Fit::automatic;
+    else
+      fail(Status::usage,
+           "adamesh extract: --fit must be 'auto', 'surface' or 'l2', not '" + *f + "'");
   }
   if (auto c = args.get_int("--min-cavity")) {
     if (*c < 0) fail(Status::usage, "adamesh extract: --min-cavity must be >= 0");

@@ -65,9 +65,13 @@ struct ExtractOptions {
   /// above 3/4 of M0's size decimates M0 to 3/4 of the budget first. The hierarchy keeps the improved M0; the output
   /// mesh is improved after the cut (the .amh cut of the same budget is the mesh before).
   bool improve = true;
-  /// Vertex positions of the output mesh: on the surface (the hierarchy's placements), or
-  /// least-squares offsets along the normals (fit_least_squares(), `--fit l2`).
-  enum class Fit { surface, l2 } fit = Fit::surface;
+  /// Vertex positions of the output mesh: least-squares offsets along the normals
+  /// (fit_least_squares(), `--fit l2`: lower RMS distance and no worse shape on every shape and
+  /// scan measured, docs/QUALITY.md "Fit"), or on the surface (the hierarchy's placements, as
+  /// the .amh's cuts have them; `--fit surface`). `automatic` (the default): l2 for the improved
+  /// adaptive meshes, surface for uniform levels and with `improve = false` (the hierarchy's cut
+  /// as it is).
+  enum class Fit { automatic, surface, l2 } fit = Fit::automatic;
 
   // ---- Report.
   /// Measure every level of the result (distance to the surface, ε_e, ε_n, angles) for
@@ -114,7 +118,7 @@ struct ExtractReport {
   HandleReport handles;             ///< ExtractOptions::max_handle
   ImproveStats base_improve;        ///< shape improvement (and decimation) of M0
   ImproveStats improve;             ///< shape improvement of the output mesh
-  std::optional<FitStats> fit;      ///< ExtractOptions::fit == l2
+  std::optional<FitStats> fit;      ///< when the output mesh was fitted (ExtractOptions::fit)
   /// Seconds per stage: topology_control (with max_handle or min_cavity), surfels, graph,
   /// disk_cover, voronoi, dual, improve_base, refine, improve (read: load + the iso-value check;
   /// write: filled by callers that write files).

@@ -91,10 +91,11 @@ ImproveStats improve_base_mesh(BaseMesh& base, const ScalarField* field, double 
                                const ExecutionContext& context = default_context());
 
 /// Least-squares vertex positions (`extract --fit l2`, docs/QUALITY.md): vertices move along
-/// their normals to minimise the squared first-order distance (f − iso)/|∇f| of seven points per
-/// triangle to the iso-surface, which makes the error two-sided instead of one-sided.
+/// their normals to minimise the squared distance of seven points per triangle to the
+/// iso-surface (the length of their Newton projections, on the derivative of the trilinear
+/// interpolant for sampled fields), which makes the error two-sided instead of one-sided.
 struct FitOptions {
-  int passes = 5;         ///< Jacobi passes
+  int passes = 2;         ///< Jacobi passes
   double damping = 0.7;   ///< fraction of each vertex's own least-squares step taken per pass
   double max_step = 1;    ///< cap on each step (world units); callers pass a fraction of a voxel
   Box box;                ///< vertices are clamped into it (empty: none)
@@ -104,8 +105,9 @@ struct FitStats {
   int passes = 0;
   std::size_t moved = 0;   ///< vertices that moved (and were not moved back)
   std::size_t undone = 0;  ///< vertex moves undone because they made triangles intersect
-  std::size_t guarded = 0; ///< moves not made: a ring triangle would drop below 20° (unless it was)
-  double rms_before = 0, rms_after = 0;  ///< area-weighted first-order RMS distance
+  std::size_t guarded = 0; ///< moves not made: a triangle would drop below min(its angle, 20°)
+  std::size_t worse = 0;   ///< moves undone: the vertex's triangles got farther from the surface
+  double rms_before = 0, rms_after = 0;  ///< area-weighted RMS distance of the sample points
   std::size_t intersections_before = 0, intersections_after = 0;
 };
 

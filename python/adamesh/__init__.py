@@ -416,7 +416,7 @@ def extract(source: Union[Volume, PathLike], iso: Optional[float] = None, *,
             levels: Optional[int] = None, base_only: bool = False,
             rmax: Optional[float] = None, rmin: Optional[float] = None, voxels: bool = False,
             min_component: int = 0, min_cavity: int = 0, max_handle: float = 0,
-            improve: bool = True, fit: str = "surface", validate: bool = False,
+            improve: bool = True, fit: str = "auto", validate: bool = False,
             measure: bool = False, threads: int = 0, progress: Any = None,
             **input_options: Any) -> Result:
     """Adaptive mesh of the iso-surface ``iso`` of ``source`` (a Volume, a volume file,
@@ -428,8 +428,9 @@ def extract(source: Union[Volume, PathLike], iso: Optional[float] = None, *,
     ``rmax``/``rmin`` disk radii (world units, voxels with ``voxels=True``), ``min_component``
     (drop smaller components, surfels), ``min_cavity`` (fill enclosed pockets of outside under
     that many voxels), ``max_handle`` (cut handles and plug tunnels whose shortest loop is under
-    that many voxels), ``improve`` (shape improvement, --no-improve), ``fit`` ("surface", or
-    "l2": least-squares vertex offsets, lower RMS distance),
+    that many voxels), ``improve`` (shape improvement, --no-improve), ``fit`` ("auto": "l2" for
+    adaptive meshes, "surface" for levels and without improvement; "l2": least-squares vertex
+    offsets, lower RMS distance; "surface": vertices on the iso-surface),
     ``validate`` (covering validator), ``measure`` (per-level error figures in the report),
     ``threads`` (0 = all cores), ``progress`` (callable(stage, fraction), or True for tqdm).
     File and shape inputs take the keywords of :func:`load`.

@@ -470,11 +470,16 @@ PYBIND11_MODULE(_adamesh, m) {
       .def_readwrite("max_handle", &ExtractOptions::max_handle)
       .def_property(
           "fit",
-          [](const ExtractOptions& o) { return o.fit == ExtractOptions::Fit::l2 ? "l2" : "surface"; },
+          [](const ExtractOptions& o) {
+            return o.fit == ExtractOptions::Fit::l2        ? "l2"
+                   : o.fit == ExtractOptions::Fit::surface ? "surface"
+                                                           : "auto";
+          },
           [](ExtractOptions& o, const std::string& f) {
             if (f == "l2") o.fit = ExtractOptions::Fit::l2;
             else if (f == "surface") o.fit = ExtractOptions::Fit::surface;
-            else fail(Status::usage, "extract: fit must be 'surface' or 'l2', not '" + f + "'");
+            else if (f == "auto") o.fit = ExtractOptions::Fit::automatic;
+            else fail(Status::usage, "extract: fit must be 'auto', 'surface' or 'l2', not '" + f + "'");
           })
       .def_readwrite("measure_levels", &ExtractOptions::measure_levels)
       .def_property(

@@ -180,12 +180,14 @@ def test_topology_control_and_fit_match_the_cli(tmp_path):
     assert cut.report["topology_control"]["handles_cut"] == 1
     with pytest.raises(adamesh.UsageError):
         adamesh.extract(vol, 0.0, max_handle=-1)
-    # fit="l2": lower error than the vertices on the surface, the same as --fit l2.
-    s = adamesh.extract("shape:torus", triangles=3000)
+    # fit="l2" (the default for adaptive meshes): lower error than the vertices on the surface,
+    # the same as --fit l2.
+    s = adamesh.extract("shape:torus", triangles=3000, fit="surface")
     f = adamesh.extract("shape:torus", triangles=3000, fit="l2")
     fit = f.report["refine"]["fit"]
-    assert fit["method"] == "l2" and fit["rms_first_order_after"] < 0.7 * fit["rms_first_order_before"]
+    assert fit["method"] == "l2" and fit["rms_after"] < 0.7 * fit["rms_before"]
     assert s.report["refine"]["fit"] == {"method": "surface"}
+    assert adamesh.extract("shape:torus", triangles=3000).report["refine"]["fit"] == fit
     assert len(f.faces) == len(s.faces)
     out = tmp_path / "t.ply"
     run_cli("extract", "shape:torus", "--triangles", "3000", "--fit", "l2", "-o", out, "--quiet")

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include "adamesh/field.h"
 
@@ -33,7 +34,31 @@ double residual_of(double d, const Vec3& g, double cap) {
   return std::min(std::abs(d) / gn, cap);
 }
 
+class DifferencedField final : public ScalarField {
+ public:
+  DifferencedField(const ScalarField& f, double h) : f_(f), h_(h) {}
+  double value(const Vec3& p) const override { return f_.value(p); }
+  Vec3 gradient(const Vec3& p) const override {
+    Vec3 g;
+    for (int k = 0; k < 3; ++k) {
+      Vec3 e{};
+      e[k] = h_;
+      g[k] = (f_.value(p + e) - f_.value(p - e)) / (2 * h_);
+    }
+    return g;
+  }
+  Box domain() const override { return f_.domain(); }
+
+ private:
+  const ScalarField& f_;
+  double h_;
+};
+
 }  // namespace
+
+std::unique_ptr<ScalarField> make_differenced_field(const ScalarField& f, double h) {
+  return std::make_unique<DifferencedField>(f, h);
+}
 
 double signed_distance(const ScalarField& f, double iso, const Vec3& p, double cap) {
   const double d = f.value(p) - iso;
@@ -52,7 +77,8 @@ ProjectResult project_to_iso(const ScalarField& f, double iso, const Vec3& p,
   Vec3 x = p;
   double d = f.value(x) - iso;
   Vec3 gx = f.gradient(x);
-  ProjectResult best{x, residual_of(d, gx, cap), 0, false};
+  ProjectResult best{x, residual_of(d, gx, cap), 0, false, gx, 0};
+  if (std::isfinite(d) && d != 0 && best.residual < cap) best.start_distance = std::copysign(best.residual, d);
 
   for (int step = 0; step < opt.max_steps; ++step) {
     if (!std::isfinite(d) || residual_of(d, gx, cap) < opt.tolerance) break;
@@ -98,6 +124,7 @@ ProjectResult project_to_iso(const ScalarField& f, double iso, const Vec3& p,
     if (r < best.residual) {
       best.point = x;
       best.residual = r;
+      best.gradient = gx;
     }
     best.steps = step + 1;
   }

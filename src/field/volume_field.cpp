@@ -10,6 +10,7 @@
 // Each query dispatches once on the scalar type; the kernels are templated on T.
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "adamesh/error.h"
 #include "adamesh/field.h"
@@ -40,12 +41,36 @@ Cell locate(const Grid& g, const Vec3& q) {
   return c;
 }
 
+/// The two samples per axis that value() interpolates between and the weights: what locate()
+/// computes without the outer indices of the central differences (value() is the hottest call
+/// of the pipeline).
+struct Corner {
+  std::int64_t lo[3], hi[3];
+  double t[3];
+};
+
+Corner locate_corner(const Grid& g, const Vec3& q) {
+  Corner c;
+  for (int a = 0; a < 3; ++a) {
+    const std::int64_t n = g.dims[a];
+    double x = q[a];
+    if (!(x >= 0)) x = 0;  // also catches NaN
+    if (x > double(n - 1)) x = double(n - 1);
+    std::int64_t i = static_cast<std::int64_t>(std::floor(x));
+    if (i > n - 2) i = std::max<std::int64_t>(n - 2, 0);
+    c.t[a] = std::min(1.0, x - double(i));
+    c.lo[a] = std::clamp<std::int64_t>(i, 0, n - 1);
+    c.hi[a] = std::clamp<std::int64_t>(i + 1, 0, n - 1);
+  }
+  return c;
+}
+
 template <class T>
-double trilinear(const T* s, const Grid& g, const Cell& c) {
+double trilinear(const T* s, const Grid& g, const Corner& c) {
   const std::int64_t sx = 1, sy = g.dims[0], sz = g.dims[0] * g.dims[1];
-  const std::int64_t x0 = c.idx[0][1] * sx, x1 = c.idx[0][2] * sx;
-  const std::int64_t y0 = c.idx[1][1] * sy, y1 = c.idx[1][2] * sy;
-  const std::int64_t z0 = c.idx[2][1] * sz, z1 = c.idx[2][2] * sz;
+  const std::int64_t x0 = c.lo[0] * sx, x1 = c.hi[0] * sx;
+  const std::int64_t y0 = c.lo[1] * sy, y1 = c.hi[1] * sy;
+  const std::int64_t z0 = c.lo[2] * sz, z1 = c.hi[2] * sz;
   const double tx = c.t[0], ty = c.t[1], tz = c.t[2];
   auto at = [&](std::int64_t o) { return static_cast<double>(s[o]); };
   const double c00 = at(x0 + y0 + z0) + tx * (at(x1 + y0 + z0) - at(x0 + y0 + z0));
@@ -86,6 +111,34 @@ Vec3 index_gradient(const T* s, const Grid& g, const Cell& c) {
   return grad;
 }
 
+/// Index-space derivative of the trilinear interpolant itself (what `trilinear` computes); zero
+/// along an axis where the continuous index was clamped (the field is constant there).
+template <class T>
+Vec3 interpolant_gradient(const T* s, const Grid& g, const Corner& c, const Vec3& q) {
+  const std::int64_t stride[3] = {1, g.dims[0], g.dims[0] * g.dims[1]};
+  Vec3 grad;
+  for (int a = 0; a < 3; ++a) {
+    const int b = (a + 1) % 3, e = (a + 2) % 3;
+    const std::int64_t hi = c.hi[a], lo = c.lo[a];
+    if (hi == lo || !(q[a] >= 0) || q[a] > double(g.dims[a] - 1)) {
+      grad[a] = 0;
+      continue;
+    }
+    double acc = 0;
+    for (int db = 0; db < 2; ++db) {
+      const double wb = db ? c.t[b] : 1 - c.t[b];
+      for (int de = 0; de < 2; ++de) {
+        const double w = wb * (de ? c.t[e] : 1 - c.t[e]);
+        const std::int64_t base = (db ? c.hi[b] : c.lo[b]) * stride[b] + (de ? c.hi[e] : c.lo[e]) * stride[e];
+        acc += w * (static_cast<double>(s[base + hi * stride[a]]) -
+                    static_cast<double>(s[base + lo * stride[a]]));
+      }
+    }
+    grad[a] = acc;
+  }
+  return grad;
+}
+
 class VolumeField final : public ScalarField {
  public:
   VolumeField(const Volume& v, std::shared_ptr<const Volume> keep)
@@ -101,7 +154,7 @@ class VolumeField final : public ScalarField {
   }
 
   double value(const Vec3& p) const override {
-    const Cell c = locate(grid_, to_index_ * (p - grid_.origin));
+    const Corner c = locate_corner(grid_, to_index_ * (p - grid_.origin));
     return dispatch_scalar(vol_->type, [&](auto tag) {
       using T = decltype(tag);
       return trilinear(vol_->samples<T>(), grid_, c);
@@ -119,6 +172,17 @@ class VolumeField final : public ScalarField {
 
   Box domain() const override { return domain_; }
 
+  /// ∇ of the trilinear interpolant (value()'s exact derivative), world units.
+  Vec3 exact_gradient(const Vec3& p) const {
+    const Vec3 q = to_index_ * (p - grid_.origin);
+    const Corner c = locate_corner(grid_, q);
+    const Vec3 gi = dispatch_scalar(vol_->type, [&](auto tag) {
+      using T = decltype(tag);
+      return interpolant_gradient(vol_->samples<T>(), grid_, c, q);
+    });
+    return grad_to_world_ * gi;
+  }
+
  private:
   std::shared_ptr<const Volume> keep_;  // null when the caller owns the volume
   const Volume* vol_;
@@ -127,7 +191,25 @@ class VolumeField final : public ScalarField {
   Box domain_;
 };
 
+/// A volume field whose gradient is the exact derivative of its trilinear interpolant.
+class InterpolantField final : public ScalarField {
+ public:
+  explicit InterpolantField(const VolumeField& f) : f_(f) {}
+  double value(const Vec3& p) const override { return f_.value(p); }
+  Vec3 gradient(const Vec3& p) const override { return f_.exact_gradient(p); }
+  Box domain() const override { return f_.domain(); }
+
+ private:
+  const VolumeField& f_;
+};
+
 }  // namespace
+
+std::unique_ptr<ScalarField> make_interpolant_gradient_field(const ScalarField& f, double h) {
+  if (const auto* vf = dynamic_cast<const VolumeField*>(&f))
+    return std::make_unique<InterpolantField>(*vf);
+  return make_differenced_field(f, h);
+}
 
 std::unique_ptr<ScalarField> make_volume_field(const Volume& volume) {
   return std::make_unique<VolumeField>(volume, nullptr);

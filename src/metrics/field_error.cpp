@@ -16,6 +16,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include "adamesh/metrics.h"
 #include "metrics/adjacency.h"
@@ -25,34 +26,6 @@
 #include "metrics/sampling.h"
 
 namespace adamesh {
-
-namespace {
-
-/// The field with its gradient replaced by central differences of its values (step h). For a
-/// sampled field this is the derivative of the trilinear interpolant itself, which keeps the
-/// Newton steps on the sheet of the surface nearest to the point; the field's own gradient
-/// (interpolated central differences of the samples) can point elsewhere in thin structures.
-class DifferencedField : public ScalarField {
- public:
-  DifferencedField(const ScalarField& f, double h) : f_(f), h_(h) {}
-  double value(const Vec3& p) const override { return f_.value(p); }
-  Vec3 gradient(const Vec3& p) const override {
-    Vec3 g;
-    for (int k = 0; k < 3; ++k) {
-      Vec3 e{};
-      e[k] = h_;
-      g[k] = (f_.value(p + e) - f_.value(p - e)) / (2 * h_);
-    }
-    return g;
-  }
-  Box domain() const override { return f_.domain(); }
-
- private:
-  const ScalarField& f_;
-  double h_;
-};
-
-}  // namespace
 
 FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double iso,
                              const FieldErrorOptions& opt, const ExecutionContext& context) {
@@ -79,8 +52,8 @@ FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double 
     const double cap = scale > 0 ? scale : 1.0;
     // Distances are measured on exact derivatives: the field's own gradient when analytic, else
     // differences of its values.
-    const DifferencedField differenced(field, 1e-6 * cap);
-    const ScalarField& mf = field.is_analytic() ? field : differenced;
+    const std::unique_ptr<ScalarField> differenced = make_differenced_field(field, 1e-6 * cap);
+    const ScalarField& mf = field.is_analytic() ? field : *differenced;
 
     // Nearest crossing of f = iso on the segment p ± R·u: scanned outwards at t = R·(k/kScan)²
     // on each side (fine near p, where thin features matter), the first sign change refined by

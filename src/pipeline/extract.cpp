@@ -294,7 +294,10 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
       ctx.report("improve", 1);
       timings["improve"] = clock.lap();
     }
-    if (o.fit == ExtractOptions::Fit::l2) {
+    const bool fit = o.fit == ExtractOptions::Fit::l2 ||
+                     (o.fit == ExtractOptions::Fit::automatic && o.improve &&
+                      ro.mode != RefineMode::uniform);
+    if (fit) {
       ctx.report("fit", 0);
       FitOptions fo;
       fo.max_step = 0.25 * sc.grid.min_spacing();

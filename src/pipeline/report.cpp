@@ -85,8 +85,9 @@ nlohmann::json refine_json(const ExtractReport& r) {
                                          {"moved", r.fit->moved},
                                          {"undone", r.fit->undone},
                                          {"guarded", r.fit->guarded},
-                                         {"rms_first_order_before", r.fit->rms_before},
-                                         {"rms_first_order_after", r.fit->rms_after},
+                                         {"worse", r.fit->worse},
+                                         {"rms_before", r.fit->rms_before},
+                                         {"rms_after", r.fit->rms_after},
                                          {"intersections_before", r.fit->intersections_before},
                                          {"intersections_after", r.fit->intersections_after}}
                         : nlohmann::json{{"method", "surface"}}},
@@ -186,7 +187,7 @@ std::string refine_summary(const ExtractReport& rep) {
     << " vertices, depth " << rep.depth << ", " << st.splits << " splits (" << st.forced_splits
     << " forced)";
   if (rep.fit)
-    s << "; fitted (--fit l2): first-order RMS distance " << rep.fit->rms_before << " -> "
+    s << "; fitted (--fit l2): RMS distance " << rep.fit->rms_before << " -> "
       << rep.fit->rms_after;
   if (st.at_limit_leaves) {
     s << "; " << st.at_limit_leaves << " triangles above the error bound (stopped at a size limit"

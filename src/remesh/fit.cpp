@@ -4,18 +4,24 @@
 // halves the error on convex patches.
 //
 // Each pass, for every triangle T and seven sample points s of T (centroid, three interior
-// points, three edge midpoints; weight |T|/7 each), the first-order signed distance
-// d(s) = (f(s) − iso)/|∇f(s)| and the unit gradient ĝ(s); moving vertex v by t·n_v moves s by
+// points, three edge midpoints; weight |T|/7 each), the signed distance d(s) to the surface and
+// the unit surface normal ĝ(s) there: d is the length of the Newton projection of s (on the
+// derivative of the trilinear interpolant for sampled fields, as `adamesh stats --field`
+// measures it), signed like f − iso, and ĝ the unit gradient at the projected point; where the
+// projection does not converge or ends more than 4× the first-order distance away, the
+// first-order (f − iso)/|∇f| and ∇f/|∇f| at s. Moving vertex v by t·n_v moves s by
 // w_v(s)·t·n_v and d by w_v(s)·t·(n_v·ĝ). Minimising Σ |T|/7 · d² over t_v alone:
 //   t_v = −Σ w d (n_v·ĝ) / Σ (w (n_v·ĝ))²,
 // applied to all vertices at once with damping (Jacobi), |t_v| capped. Sums per triangle are
 // computed in parallel and added per vertex in a fixed order: identical for any thread count.
-// Moves that make triangles intersect are undone (vertices of the new intersecting pairs back
-// to where they were, until the count is not above the count before).
+// The angle guard is checked on the pass's result (all moves at once), moves that break it
+// undone until none does. Moves that make triangles intersect are undone (vertices of the new
+// intersecting pairs back to where they were, until the count is not above the count before).
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <numbers>
 #include <vector>
 
@@ -103,11 +109,47 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
       i = j;
     }
   }
+  // Distances on the derivative of the interpolant (sampled fields), as the evaluator does.
+  const double diag = field.domain().diagonal();
+  const std::unique_ptr<ScalarField> differenced =
+      make_interpolant_gradient_field(field, 1e-6 * (diag > 0 ? diag : 1.0));
+  const ScalarField& mf = field.is_analytic() ? field : *differenced;
+  ProjectOptions po;
+  po.max_steps = 8;
+  po.max_step = 4 * o.max_step;
+  po.tolerance = 1e-2 * o.max_step;
+  // Signed distance d of x to the surface and the unit normal ĝ there (false: no gradient).
+  auto surface_distance = [&](const Vec3& x, double& d, Vec3& gh) {
+    const ProjectResult pr = project_to_iso(mf, iso, x, po);
+    const double sd = pr.start_distance;
+    if (sd == 0 && pr.residual != 0) return false;  // flat at x, or not finite
+    const double dist = distance(pr.point, x);
+    const double gl = norm(pr.gradient);
+    if (pr.converged && dist <= 4 * std::abs(sd) + po.tolerance && gl > 0 && std::isfinite(gl)) {
+      d = std::copysign(dist, sd);
+      gh = (1.0 / gl) * pr.gradient;
+      return true;
+    }
+    // The first-order distance and direction at x.
+    const Vec3 g = mf.gradient(x);
+    const double gx = norm(g);
+    if (!(gx > 0) || !std::isfinite(gx)) return false;
+    d = sd;
+    gh = (1.0 / gx) * g;
+    return true;
+  };
   // Per-triangle partial sums: [corner] numerator, denominator; plus the squared error.
   std::vector<std::array<double, 6>> part(nt);
   std::vector<double> err2(nt), area(nt);
   std::vector<Vec3> normal(nv);
-  auto measure_and_sum = [&](bool sums) {
+  auto rms_of_err2 = [&] {
+    double e = 0, at = 0;
+    for (std::size_t t = 0; t < nt; ++t) e += err2[t], at += area[t];
+    return at > 0 ? std::sqrt(e / at) : 0.0;
+  };
+  // Per-triangle error (and with `sums` the per-corner sums) at the positions p, for every
+  // triangle or only those listed in `only`; returns the RMS over all triangles.
+  auto measure_and_sum = [&](bool sums, const std::vector<std::uint32_t>* only = nullptr) {
     // Area-weighted vertex normals.
     std::fill(normal.begin(), normal.end(), Vec3{});
     for (std::size_t t = 0; t < nt; ++t) {
@@ -119,8 +161,10 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
       const double l = norm(n);
       n = l > 0 ? (1.0 / l) * n : Vec3{};
     }
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1024), [&](const auto& r) {
-      for (std::size_t t = r.begin(); t != r.end(); ++t) {
+    const std::size_t count = only ? only->size() : nt;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024), [&](const auto& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        const std::size_t t = only ? (*only)[i] : i;
         const auto c = tri(t);
         const double a = 0.5 * norm(cross3(p[c[1]] - p[c[0]], p[c[2]] - p[c[0]]));
         area[t] = a;
@@ -128,14 +172,11 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
         double e2 = 0;
         for (const auto& b : kBary) {
           const Vec3 x = b[0] * p[c[0]] + b[1] * p[c[1]] + b[2] * p[c[2]];
-          const Vec3 g = field.gradient(x);
-          const double gl = norm(g);
-          if (!(gl > 0) || !std::isfinite(gl)) continue;
-          const double d = (field.value(x) - iso) / gl;
-          if (!std::isfinite(d)) continue;
+          double d;
+          Vec3 gh;
+          if (!surface_distance(x, d, gh)) continue;
           e2 += a / kSamples * d * d;
           if (!sums) continue;
-          const Vec3 gh = (1.0 / gl) * g;
           for (int k = 0; k < 3; ++k) {
             const double wg = b[k] * dot(normal[c[k]], gh);
             s[2 * k] += a / kSamples * wg * d;
@@ -146,12 +187,9 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
         err2[t] = e2;
       }
     });
-    double e = 0, at = 0;
-    for (std::size_t t = 0; t < nt; ++t) e += err2[t], at += area[t];
-    return at > 0 ? std::sqrt(e / at) : 0.0;
+    return rms_of_err2();
   };
 
-  st.rms_before = measure_and_sum(false);
   const std::int64_t crossings_measured = self_intersections(mesh).pairs;  // −1: not measured
   const std::size_t crossings_before = static_cast<std::size_t>(std::max<std::int64_t>(crossings_measured, 0));
   // Triangles around each vertex (CSR), for the angle guard.
@@ -165,22 +203,50 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
     for (std::size_t t = 0; t < nt; ++t)
       for (auto v : tri(t)) inc[fill[v]++] = static_cast<std::uint32_t>(t);
   }
-  auto ring_min_angle = [&](std::uint32_t v, const Vec3& at) {
-    double m = std::numbers::pi;
+  constexpr double kMinAngle = kMinAngleDeg * std::numbers::pi / 180;
+  // True when a triangle around v is sharper with the positions `q` than min(with `ref`, 20°).
+  auto ring_breaks = [&](const std::vector<Vec3>& q, const std::vector<Vec3>& ref,
+                         std::uint32_t v) {
     for (std::uint32_t i = inc_off[v]; i < inc_off[v + 1]; ++i) {
-      auto c = tri(inc[i]);
-      Vec3 x[3] = {p[c[0]], p[c[1]], p[c[2]]};
-      for (int k = 0; k < 3; ++k)
-        if (c[k] == v) x[k] = at;
-      m = std::min(m, smallest_angle(x[0], x[1], x[2]));
+      const auto c = tri(inc[i]);
+      const double now = smallest_angle(q[c[0]], q[c[1]], q[c[2]]);
+      if (now < kMinAngle && now < smallest_angle(ref[c[0]], ref[c[1]], ref[c[2]])) return true;
     }
-    return m;
+    return false;
   };
-  std::vector<double> num(nv), den(nv);
+  // Moves the vertices of `moved` whose ring breaks the guard back to `ref` until none does
+  // (each round only moves vertices back, so it ends); `moved` keeps the others. Returns the
+  // vertices moved back.
+  auto guard = [&](std::vector<Vec3>& q, const std::vector<Vec3>& ref,
+                   std::vector<std::uint32_t>& moved) {
+    std::vector<std::uint32_t> back;
+    for (bool changed = true; changed;) {
+      changed = false;
+      std::vector<std::uint32_t> keep;
+      for (const std::uint32_t v : moved) {
+        if (ring_breaks(q, ref, v)) {
+          q[v] = ref[v];
+          back.push_back(v);
+          changed = true;
+        } else {
+          keep.push_back(v);
+        }
+      }
+      moved.swap(keep);
+    }
+    return back;
+  };
+  auto ring_sum = [&](const std::vector<double>& e, std::uint32_t v) {
+    double sum = 0;
+    for (std::uint32_t i = inc_off[v]; i < inc_off[v + 1]; ++i) sum += e[inc[i]];
+    return sum;
+  };
+  std::vector<double> num(nv), den(nv), old_err;
   std::vector<Vec3> next(nv);
+  std::vector<std::uint8_t> touched(nt);
+  st.rms_before = measure_and_sum(true);
   for (int pass = 0; pass < o.passes; ++pass) {
     context.report("fit", static_cast<double>(pass) / o.passes);
-    measure_and_sum(true);
     std::fill(num.begin(), num.end(), 0.0);
     std::fill(den.begin(), den.end(), 0.0);
     for (std::size_t t = 0; t < nt; ++t) {
@@ -188,20 +254,41 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
       for (int k = 0; k < 3; ++k) num[c[k]] += part[t][2 * k], den[c[k]] += part[t][2 * k + 1];
     }
     next = p;
+    std::vector<std::uint32_t> moved;
     for (std::uint32_t v = 0; v < nv; ++v) {
       if (hold[v] || !(den[v] > 0)) continue;
       const double t = std::clamp(-o.damping * num[v] / den[v], -o.max_step, o.max_step);
       Vec3 q = p[v] + t * normal[v];
       if (o.box.lo.x < o.box.hi.x)
         for (int k = 0; k < 3; ++k) q[k] = std::clamp(q[k], o.box.lo[k], o.box.hi[k]);
-      const double before = ring_min_angle(v, p[v]);
-      if (ring_min_angle(v, q) < std::min(before, kMinAngleDeg * std::numbers::pi / 180)) {
-        ++st.guarded;
-        continue;
-      }
       next[v] = q;
+      moved.push_back(v);
     }
-    p.swap(next);
+    // The guard on the pass's result (all moves at once): a moved vertex with a triangle around
+    // it now sharper than min(before, 20°) goes back.
+    st.guarded += guard(next, p, moved).size();
+    // Measure the moved mesh; a vertex whose triangles are farther from the surface in sum than
+    // before the pass goes back (the linearised step overshoots where the surface bends within a
+    // triangle: voxel-sized triangles on noisy data), then the guard again, and the triangles
+    // around the vertices that went back are measured again.
+    old_err = err2;
+    p.swap(next);  // p: the moved positions, next: the pass's start
+    measure_and_sum(true);
+    std::vector<std::uint32_t> back, kept;
+    for (const std::uint32_t v : moved) (ring_sum(err2, v) > ring_sum(old_err, v) ? back : kept).push_back(v);
+    for (const std::uint32_t v : back) p[v] = next[v];
+    const std::vector<std::uint32_t> more = guard(p, next, kept);
+    back.insert(back.end(), more.begin(), more.end());
+    st.worse += back.size();
+    if (!back.empty()) {
+      std::fill(touched.begin(), touched.end(), 0);
+      for (const std::uint32_t v : back)
+        for (std::uint32_t i = inc_off[v]; i < inc_off[v + 1]; ++i) touched[inc[i]] = 1;
+      std::vector<std::uint32_t> again;
+      for (std::uint32_t t = 0; t < nt; ++t)
+        if (touched[t]) again.push_back(t);
+      measure_and_sum(true, &again);
+    }
     ++st.passes;
   }
   auto write = [&] {
@@ -223,12 +310,19 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
             p[v] = start[v], ++undone;
     if (undone == 0) break;
     st.undone += undone;
+    // Moving some vertices back next to moved ones may sharpen triangles: the guard again,
+    // against the starting positions.
+    std::vector<std::uint32_t> moved;
+    for (std::uint32_t v = 0; v < nv; ++v)
+      if (p[v].x != start[v].x || p[v].y != start[v].y || p[v].z != start[v].z) moved.push_back(v);
+    st.undone += guard(p, start, moved).size();
     write();
   }
   st.intersections_before = crossings_before;
   for (std::size_t v = 0; v < nv; ++v)
     st.moved += p[v].x != start[v].x || p[v].y != start[v].y || p[v].z != start[v].z;
-  st.rms_after = measure_and_sum(false);
+  // err2 holds the errors of the positions p unless moves were undone since.
+  st.rms_after = st.undone > 0 ? measure_and_sum(false) : rms_of_err2();
   mesh.normals.clear();
   return st;
 }
