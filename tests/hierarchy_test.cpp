@@ -378,6 +378,29 @@ TEST(HierarchyCli, TrianglesAndDeterminism) {
   EXPECT_LE(read_mesh(tmp.file("c.ply")).num_triangles(), 2500u);
 }
 
+// `level --fit INPUT`: a cut from the .amh fitted against the volume it came from has a lower
+// RMS distance than the cut with its vertices on the surface; another volume is refused.
+TEST(HierarchyCli, LevelFitsAgainstTheVolume) {
+  TempDir tmp;
+  ASSERT_EQ(run_cli("extract shape:torus --res 48 --quiet --triangles 3000 -o " + tmp.file("a.ply") +
+                    " --hierarchy " + tmp.file("a.amh")).exit_code, 0);
+  const std::string cut = "level " + tmp.file("a.amh") + " --triangles 3000 --quiet -o ";
+  ASSERT_EQ(run_cli(cut + tmp.file("s.ply")).exit_code, 0);
+  const auto r = run_cli(cut + tmp.file("f.ply") + " --fit shape:torus --res 48");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  auto rms = [&](const std::string& mesh) {
+    const auto s = run_cli("stats " + mesh + " --field shape:torus --res 48 --json");
+    EXPECT_EQ(s.exit_code, 0) << s.err;
+    return nlohmann::json::parse(s.out)["distance"]["rms"].get<double>();
+  };
+  EXPECT_LT(rms(tmp.file("f.ply")), 0.7 * rms(tmp.file("s.ply")));
+  EXPECT_EQ(read_mesh(tmp.file("f.ply")).triangles, read_mesh(tmp.file("s.ply")).triangles);
+  const auto bad = run_cli(cut + tmp.file("x.ply") + " --fit shape:torus --res 48 --bounds -2,-2,-2,2,2,2");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.err.find("is not the box of"), std::string::npos) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(tmp.file("x.ply")));
+}
+
 TEST(HierarchyCli, Errors) {
   TempDir tmp;
   write_bytes(tmp.file("bad.amh"), "ADAMHIER and then nothing sensible");

@@ -1,9 +1,13 @@
 // `adamesh level`: cuts a mesh from a stored refinement hierarchy (.amh) without the volume —
 // a uniform level, an error bound, or a triangle budget (docs/HIERARCHY.md).
+#include <cmath>
 #include <iostream>
+#include <sstream>
+#include <vector>
 
 #include "adamesh/error.h"
 #include "adamesh/improve.h"
+#include "adamesh/input.h"
 #include "adamesh/io.h"
 #include "adamesh/refine.h"
 #include "args.h"
@@ -12,9 +16,10 @@
 
 namespace adamesh::cli {
 
-int cmd_level(const Argv& argv) {
-  const Args args("level", argv,
-                  {
+namespace {
+
+std::vector<OptionSpec> level_specs() {
+  std::vector<OptionSpec> s = {
                       {"--level", true, "uniform level K: splits of triangles of level < K"},
                       {"--max-error", true, "the splits whose error bound exceeds E (world units)"},
                       {"--triangles", true, "the longest prefix of splits with at most N triangles"},
@@ -29,13 +34,25 @@ int cmd_level(const Argv& argv) {
                       {"--improve", false,
                        "shape improvement without the volume (flips within 0.25 voxel of the "
                        "cut, tangential moves, needle collapses; docs/QUALITY.md)"},
+                      {"--fit", true,
+                       "least-squares vertex offsets along the normals against the volume INPUT "
+                       "the hierarchy was made from (what extract writes by default; "
+                       "docs/QUALITY.md \"Fit\"); input options as for extract"},
                       {"--ascii", false, "ASCII PLY instead of binary"},
                       {"--quiet", false, "no summary line"},
                       compress_option_spec(),
-                  });
+  };
+  for (auto& o : input_option_specs()) s.push_back(o);
+  return s;
+}
+
+}  // namespace
+
+int cmd_level(const Argv& argv) {
+  const Args args("level", argv, level_specs());
   if (args.help_requested()) {
     std::cout << args.usage("FILE.amh (--level K | --max-error E | --triangles N | --all) "
-                            "-o mesh.ply|- [--format F]")
+                            "-o mesh.ply|- [--format F] [--fit INPUT]")
               << "\n-o - --format ply writes the mesh to standard output (ply obj off stl glb; "
                  "binary formats\nare refused on a terminal); the summary then goes to stderr.\n";
     return 0;
@@ -83,6 +100,23 @@ int cmd_level(const Argv& argv) {
     io.target_triangles = cut.mesh.num_triangles();
     improve_mesh(cut.mesh, cut.vertex_border, nullptr, h.iso, io);
     what += ", improved";
+  }
+  if (const auto spec = args.get("--fit")) {
+    const Input in = load_input(*spec, input_options_from(args));
+    // The wrong volume would pull the vertices towards another surface: its box must be the
+    // hierarchy's (to a voxel).
+    const Box b = in.field->domain();
+    for (int k = 0; k < 3; ++k)
+      if (!(std::abs(b.lo[k] - h.bounds.lo[k]) <= h.voxel && std::abs(b.hi[k] - h.bounds.hi[k]) <= h.voxel))
+        fail(Status::usage, "adamesh level: --fit " + in.spec + ": its box is not the box of " + path +
+                                " (a different volume, or other input options than extract had)");
+    FitOptions fo;
+    fo.max_step = 0.25 * h.voxel;
+    fo.box = b;
+    const FitStats st = fit_least_squares(cut.mesh, cut.vertex_border, *in.field, h.iso, fo);
+    std::ostringstream w;
+    w << ", fitted: RMS distance " << st.rms_before << " -> " << st.rms_after;
+    what += w.str();
   }
   write_mesh_output(cut.mesh, *out, wo);
   if (!args.has("--quiet")) {
