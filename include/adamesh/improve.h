@@ -108,6 +108,8 @@ struct FitStats {
   std::size_t guarded = 0; ///< moves not made: a triangle would drop below min(its angle, 20°)
   std::size_t worse = 0;   ///< moves undone: the vertex's triangles got farther from the surface
   double rms_before = 0, rms_after = 0;  ///< area-weighted RMS distance of the sample points
+  /// Intersecting triangle pairs with a triangle the fit moved (the others do not change),
+  /// at the starting positions and at the end: no pair is new, so after ≤ before.
   std::size_t intersections_before = 0, intersections_after = 0;
 };
 

@@ -22,7 +22,9 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <iterator>
 #include <numbers>
+#include <optional>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -190,8 +192,6 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
     return rms_of_err2();
   };
 
-  const std::int64_t crossings_measured = self_intersections(mesh).pairs;  // −1: not measured
-  const std::size_t crossings_before = static_cast<std::size_t>(std::max<std::int64_t>(crossings_measured, 0));
   // Triangles around each vertex (CSR), for the angle guard.
   std::vector<std::uint32_t> inc_off(nv + 1, 0), inc;
   for (std::size_t t = 0; t < nt; ++t)
@@ -296,29 +296,48 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
       for (int k = 0; k < 3; ++k) mesh.positions[3 * v + k] = static_cast<float>(p[v][k]);
   };
   write();
-  // No new intersections: undo the moves of the vertices of intersecting triangles.
-  for (int round = 0; round < 20 && crossings_measured >= 0; ++round) {
-    const IntersectionReport r = self_intersections(mesh, nt * nt);
-    if (r.pairs < 0) break;
-    st.intersections_after = static_cast<std::size_t>(r.pairs);
-    if (st.intersections_after <= crossings_before) break;
-    std::size_t undone = 0;
-    for (const auto& [a, b] : r.first_pairs)
-      for (auto t : {a, b})
-        for (auto v : tri(t))
-          if (p[v].x != start[v].x || p[v].y != start[v].y || p[v].z != start[v].z)
-            p[v] = start[v], ++undone;
-    if (undone == 0) break;
-    st.undone += undone;
-    // Moving some vertices back next to moved ones may sharpen triangles: the guard again,
-    // against the starting positions.
-    std::vector<std::uint32_t> moved;
-    for (std::uint32_t v = 0; v < nv; ++v)
-      if (p[v].x != start[v].x || p[v].y != start[v].y || p[v].z != start[v].z) moved.push_back(v);
-    st.undone += guard(p, start, moved).size();
-    write();
+  // No new intersections. Only pairs with a moved triangle can change: the pairs among them
+  // are counted at the starting positions and now (intersecting_pairs_involving searches only
+  // the grid cells of those triangles), and the moved vertices of every new pair go back, until
+  // there is none (then the angle guard again).
+  auto moved_vertex = [&](std::uint32_t v) {
+    return p[v].x != start[v].x || p[v].y != start[v].y || p[v].z != start[v].z;
+  };
+  std::vector<std::uint8_t> involved(nt, 0);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (auto v : tri(t)) involved[t] |= moved_vertex(v) ? 1 : 0;
+  Mesh at_start = mesh;
+  for (std::size_t v = 0; v < nv; ++v)
+    for (int k = 0; k < 3; ++k) at_start.positions[3 * v + k] = static_cast<float>(start[v][k]);
+  using PairList = std::vector<std::pair<std::uint32_t, std::uint32_t>>;
+  const std::optional<PairList> before = intersecting_pairs_involving(at_start, involved, context);
+  at_start = Mesh{};
+  if (before) {  // nullopt: not measured (piles of triangles)
+    st.intersections_before = before->size();
+    st.intersections_after = before->size();
+    for (int round = 0; round < 20; ++round) {
+      const std::optional<PairList> now = intersecting_pairs_involving(mesh, involved, context);
+      if (!now) break;
+      st.intersections_after = now->size();
+      PairList added;  // both lists are sorted
+      std::set_difference(now->begin(), now->end(), before->begin(), before->end(),
+                          std::back_inserter(added));
+      std::size_t undone = 0;
+      for (const auto& [a, b] : added)
+        for (auto t : {a, b})
+          for (auto v : tri(t))
+            if (moved_vertex(v)) p[v] = start[v], ++undone;
+      if (undone == 0) break;
+      st.undone += undone;
+      // Moving some vertices back next to moved ones may sharpen triangles: the guard again,
+      // against the starting positions.
+      std::vector<std::uint32_t> moved;
+      for (std::uint32_t v = 0; v < nv; ++v)
+        if (moved_vertex(v)) moved.push_back(v);
+      st.undone += guard(p, start, moved).size();
+      write();
+    }
   }
-  st.intersections_before = crossings_before;
   for (std::size_t v = 0; v < nv; ++v)
     st.moved += p[v].x != start[v].x || p[v].y != start[v].y || p[v].z != start[v].z;
   // err2 holds the errors of the positions p unless moves were undone since.
