@@ -9,7 +9,8 @@
 // derivative of the trilinear interpolant for sampled fields, as `adamesh stats --field`
 // measures it), signed like f − iso, and ĝ the unit gradient at the projected point; where the
 // projection does not converge or ends more than 4× the first-order distance away, the
-// first-order (f − iso)/|∇f| and ∇f/|∇f| at s. Moving vertex v by t·n_v moves s by
+// first-order (f − iso)/|∇f| and ∇f/|∇f| at s, which then counts in the error but does not
+// steer the step. Moving vertex v by t·n_v moves s by
 // w_v(s)·t·n_v and d by w_v(s)·t·(n_v·ĝ). Minimising Σ |T|/7 · d² over t_v alone:
 //   t_v = −Σ w d (n_v·ĝ) / Σ (w (n_v·ĝ))²,
 // applied to all vertices at once with damping (Jacobi), |t_v| capped. Sums per triangle are
@@ -121,7 +122,8 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
   po.max_step = 4 * o.max_step;
   po.tolerance = 1e-2 * o.max_step;
   // Signed distance d of x to the surface and the unit normal ĝ there (false: no gradient).
-  auto surface_distance = [&](const Vec3& x, double& d, Vec3& gh) {
+  auto surface_distance = [&](const Vec3& x, double& d, Vec3& gh, bool& reliable) {
+    reliable = true;
     const ProjectResult pr = project_to_iso(mf, iso, x, po);
     const double sd = pr.start_distance;
     if (sd == 0 && pr.residual != 0) return false;  // flat at x, or not finite
@@ -132,7 +134,10 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
       gh = (1.0 / gl) * pr.gradient;
       return true;
     }
-    // The first-order distance and direction at x.
+    // The first-order distance at x counts in the error but does not steer: a few tenths of a
+    // voxel from a noisy or label surface it can point anywhere (frog at 100k: RMS 0.951 when
+    // it steered, 0.915 when not, 0.956 on the surface).
+    reliable = false;
     const Vec3 g = mf.gradient(x);
     const double gx = norm(g);
     if (!(gx > 0) || !std::isfinite(gx)) return false;
@@ -176,9 +181,10 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
           const Vec3 x = b[0] * p[c[0]] + b[1] * p[c[1]] + b[2] * p[c[2]];
           double d;
           Vec3 gh;
-          if (!surface_distance(x, d, gh)) continue;
+          bool reliable;
+          if (!surface_distance(x, d, gh, reliable)) continue;
           e2 += a / kSamples * d * d;
-          if (!sums) continue;
+          if (!sums || !reliable) continue;
           for (int k = 0; k < 3; ++k) {
             const double wg = b[k] * dot(normal[c[k]], gh);
             s[2 * k] += a / kSamples * wg * d;
