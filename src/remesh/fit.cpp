@@ -40,8 +40,9 @@
 namespace adamesh {
 namespace {
 
-constexpr int kSamples = 7;
-// Barycentric weights of the sample points.
+constexpr int kSamples = 7, kInterior = 4;
+// Barycentric weights of the sample points: four inside, then the midpoints of the sides
+// (corners 0-1, 1-2, 2-0).
 constexpr double kBary[kSamples][3] = {{1. / 3, 1. / 3, 1. / 3}, {2. / 3, 1. / 6, 1. / 6},
                                        {1. / 6, 2. / 3, 1. / 6}, {1. / 6, 1. / 6, 2. / 3},
                                        {0.5, 0.5, 0},           {0, 0.5, 0.5},
@@ -91,6 +92,10 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
   // Vertices that stay: fixed ones and those on the mesh boundary.
   std::vector<std::uint8_t> hold(nv, 0);
   for (std::size_t v = 0; v < nv && v < fixed.size(); ++v) hold[v] = fixed[v];
+  // Edges: side k of triangle t (corners k, k+1) is edge side_edge[3t+k]; an edge's midpoint is
+  // a sample of both its triangles, measured once.
+  std::vector<std::uint32_t> side_edge(3 * nt);
+  std::vector<std::array<std::uint32_t, 2>> edge_ends;
   {
     std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;
     edges.reserve(3 * nt);
@@ -98,13 +103,16 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
       const auto c = tri(t);
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t a = std::min(c[k], c[(k + 1) % 3]), b = std::max(c[k], c[(k + 1) % 3]);
-        edges.push_back({(std::uint64_t{a} << 32) | b, 0});
+        edges.push_back({(std::uint64_t{a} << 32) | b, static_cast<std::uint32_t>(3 * t + k)});
       }
     }
     std::sort(edges.begin(), edges.end());
     for (std::size_t i = 0; i < edges.size();) {
       std::size_t j = i;
       while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+      for (std::size_t q = i; q < j; ++q) side_edge[edges[q].second] = static_cast<std::uint32_t>(edge_ends.size());
+      edge_ends.push_back({static_cast<std::uint32_t>(edges[i].first >> 32),
+                           static_cast<std::uint32_t>(edges[i].first & 0xffffffffu)});
       if (j - i == 1) {
         hold[edges[i].first >> 32] = 1;
         hold[edges[i].first & 0xffffffffu] = 1;
@@ -154,6 +162,12 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
     for (std::size_t t = 0; t < nt; ++t) e += err2[t], at += area[t];
     return at > 0 ? std::sqrt(e / at) : 0.0;
   };
+  struct Sample {
+    double d = 0;
+    Vec3 gh;
+    bool ok = false, reliable = false;
+  };
+  std::vector<Sample> mid(edge_ends.size());
   // Per-triangle error (and with `sums` the per-corner sums) at the positions p, for every
   // triangle or only those listed in `only`; returns the RMS over all triangles.
   auto measure_and_sum = [&](bool sums, const std::vector<std::uint32_t>* only = nullptr) {
@@ -168,6 +182,22 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
       const double l = norm(n);
       n = l > 0 ? (1.0 / l) * n : Vec3{};
     }
+    // The edge midpoints first: every edge, or those of the listed triangles.
+    std::vector<std::uint32_t> edge_list;
+    if (only) {
+      for (const std::uint32_t t : *only)
+        for (int k = 0; k < 3; ++k) edge_list.push_back(side_edge[3 * t + k]);
+      std::sort(edge_list.begin(), edge_list.end());
+      edge_list.erase(std::unique(edge_list.begin(), edge_list.end()), edge_list.end());
+    }
+    const std::size_t ecount = only ? edge_list.size() : edge_ends.size();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ecount, 2048), [&](const auto& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        const std::uint32_t e = only ? edge_list[i] : static_cast<std::uint32_t>(i);
+        Sample& m = mid[e];
+        m.ok = surface_distance(0.5 * (p[edge_ends[e][0]] + p[edge_ends[e][1]]), m.d, m.gh, m.reliable);
+      }
+    });
     const std::size_t count = only ? only->size() : nt;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024), [&](const auto& r) {
       for (std::size_t i = r.begin(); i != r.end(); ++i) {
@@ -177,12 +207,19 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
         area[t] = a;
         std::array<double, 6> s{};
         double e2 = 0;
-        for (const auto& b : kBary) {
-          const Vec3 x = b[0] * p[c[0]] + b[1] * p[c[1]] + b[2] * p[c[2]];
+        for (int j = 0; j < kSamples; ++j) {
+          const auto& b = kBary[j];
           double d;
           Vec3 gh;
           bool reliable;
-          if (!surface_distance(x, d, gh, reliable)) continue;
+          if (j < kInterior) {
+            const Vec3 x = b[0] * p[c[0]] + b[1] * p[c[1]] + b[2] * p[c[2]];
+            if (!surface_distance(x, d, gh, reliable)) continue;
+          } else {  // the midpoint of side j − kInterior
+            const Sample& m = mid[side_edge[3 * t + (j - kInterior)]];
+            if (!m.ok) continue;
+            d = m.d, gh = m.gh, reliable = m.reliable;
+          }
           e2 += a / kSamples * d * d;
           if (!sums || !reliable) continue;
           for (int k = 0; k < 3; ++k) {
