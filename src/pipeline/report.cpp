@@ -187,7 +187,7 @@ std::string refine_summary(const ExtractReport& rep) {
     << " vertices, depth " << rep.depth << ", " << st.splits << " splits (" << st.forced_splits
     << " forced)";
   if (rep.fit)
-    s << "; fitted (--fit l2): RMS distance " << rep.fit->rms_before << " -> "
+    s << "; fitted (least squares along the normals): RMS distance " << rep.fit->rms_before << " -> "
       << rep.fit->rms_after;
   if (st.at_limit_leaves) {
     s << "; " << st.at_limit_leaves << " triangles above the error bound (stopped at a size limit"
