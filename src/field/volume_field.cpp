@@ -26,16 +26,21 @@ struct Cell {
   double t[3];
 };
 
+/// Along one axis of n samples: the clamped continuous index x's lower sample i (at most n − 2)
+/// and its weight t in [0, 1].
+std::int64_t lower_sample(std::int64_t n, double x, double& t) {
+  if (!(x >= 0)) x = 0;  // also catches NaN
+  if (x > double(n - 1)) x = double(n - 1);
+  std::int64_t i = static_cast<std::int64_t>(std::floor(x));
+  if (i > n - 2) i = std::max<std::int64_t>(n - 2, 0);
+  t = std::min(1.0, x - double(i));
+  return i;
+}
+
 Cell locate(const Grid& g, const Vec3& q) {
   Cell c;
   for (int a = 0; a < 3; ++a) {
-    const std::int64_t n = g.dims[a];
-    double x = q[a];
-    if (!(x >= 0)) x = 0;  // also catches NaN
-    if (x > double(n - 1)) x = double(n - 1);
-    std::int64_t i = static_cast<std::int64_t>(std::floor(x));
-    if (i > n - 2) i = std::max<std::int64_t>(n - 2, 0);
-    c.t[a] = std::min(1.0, x - double(i));
+    const std::int64_t n = g.dims[a], i = lower_sample(n, q[a], c.t[a]);
     for (int d = 0; d < 4; ++d) c.idx[a][d] = std::clamp<std::int64_t>(i - 1 + d, 0, n - 1);
   }
   return c;
@@ -52,13 +57,7 @@ struct Corner {
 Corner locate_corner(const Grid& g, const Vec3& q) {
   Corner c;
   for (int a = 0; a < 3; ++a) {
-    const std::int64_t n = g.dims[a];
-    double x = q[a];
-    if (!(x >= 0)) x = 0;  // also catches NaN
-    if (x > double(n - 1)) x = double(n - 1);
-    std::int64_t i = static_cast<std::int64_t>(std::floor(x));
-    if (i > n - 2) i = std::max<std::int64_t>(n - 2, 0);
-    c.t[a] = std::min(1.0, x - double(i));
+    const std::int64_t n = g.dims[a], i = lower_sample(n, q[a], c.t[a]);
     c.lo[a] = std::clamp<std::int64_t>(i, 0, n - 1);
     c.hi[a] = std::clamp<std::int64_t>(i + 1, 0, n - 1);
   }
