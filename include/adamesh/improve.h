@@ -54,6 +54,15 @@ struct ImproveOptions {
   /// After the rounds, move the vertices of self-intersecting triangles to the mean of their
   /// neighbours while that lowers the number of intersecting pairs (docs/QUALITY.md).
   bool untangle = false;
+  /// Last, the vertices of triangles whose smallest angle is below this (degrees) may leave the
+  /// surface (docs/QUALITY.md "Rescue"): each moves — in 3-D; a border vertex within its box
+  /// face — to raise the smallest angle around it, while its triangles' sample points (the
+  /// vertex, the midpoints of its edges, the centroids) stay within the deviation bound of the
+  /// surface (or no farther than they were), inside the box and under an explicit error bound;
+  /// moves that make triangles intersect go back. Thin slivers of the surface (tiny components a
+  /// few hundredths of a voxel thick) and crumpled patches have no well-shaped mesh *on* the
+  /// surface. 0 = off.
+  double rescue_below_deg = 0;
 };
 
 struct ImproveStats {
@@ -64,6 +73,12 @@ struct ImproveStats {
   double pct_below_20_before = 0, pct_below_20_after = 0;
   /// With `untangle`: intersecting triangle pairs before and after, and the vertex moves made.
   std::size_t intersections_before = 0, intersections_after = 0, untangle_moves = 0;
+  /// With `rescue_below_deg`: vertices moved off the surface (after the undoing) and moves undone
+  /// because they made triangles intersect.
+  std::size_t rescued = 0, rescue_undone = 0;
+  /// With `rescue_below_deg`: specks replaced by a tetrahedron or an octahedron, and specks left
+  /// as they were because the replacement crossed another triangle.
+  std::size_t specks = 0, specks_undone = 0;
 };
 
 /// Improves `mesh` in place. `fixed` (empty, or one flag per vertex): vertices that must not move

@@ -284,6 +284,7 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
       io.box = in.field->domain();
       io.target_triangles = cut.mesh.num_triangles();
       io.untangle = true;
+      io.rescue_below_deg = 20;
       // An explicit --max-error is a bound the improvement keeps; the default's cap at marching
       // cubes' count already gives up the bound where it binds.
       if (ro.mode == RefineMode::max_error && ro.max_triangles == 0) {

@@ -25,7 +25,11 @@ nlohmann::json improve_json(const ImproveStats& st) {
           {"pct_below_20_after", st.pct_below_20_after},
           {"intersections_before", st.intersections_before},
           {"intersections_after", st.intersections_after},
-          {"untangle_moves", st.untangle_moves}};
+          {"untangle_moves", st.untangle_moves},
+          {"rescued", st.rescued},
+          {"rescue_undone", st.rescue_undone},
+          {"specks", st.specks},
+          {"specks_undone", st.specks_undone}};
 }
 
 nlohmann::json topology_json(const TopologyReport& t) {

@@ -52,6 +52,11 @@ constexpr double kWideMoveBelowDeg = 20;
 constexpr double kDecimateMinAngle = 15;
 /// Untangling moves make no triangle below this (degrees) unless its ring had one.
 constexpr double kUntangleMinAngle = 20;
+/// Specks (Improver::replace_specks): at most this long (voxels) and this many triangles, and
+/// their replacements have no angle below kSpeckAngleDeg.
+constexpr double kSpeckVoxels = 2;
+constexpr std::size_t kSpeckMaxTriangles = 64;
+constexpr double kSpeckAngleDeg = 25;
 /// Untangling moves make no edge shorter than this many voxels.
 constexpr double kUntangleMinEdge = 0.01;
 
@@ -103,6 +108,48 @@ double segment_distance(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3&
   return norm((p + t1 * d1) - (r + t2 * d2));
 }
 
+
+/// Eigenvectors of the symmetric 3×3 matrix a (row-major), as the columns of v, eigenvalues in
+/// w, sorted by decreasing eigenvalue; v's columns form a right-handed frame. Cyclic Jacobi
+/// sweeps (deterministic).
+void symmetric_eigen(std::array<double, 9> a, std::array<double, 3>& w, std::array<Vec3, 3>& v) {
+  std::array<double, 9> q = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  for (int sweep = 0; sweep < 32; ++sweep) {
+    const double off = a[1] * a[1] + a[2] * a[2] + a[5] * a[5];
+    if (off <= 1e-30 * (a[0] * a[0] + a[4] * a[4] + a[8] * a[8]) || off == 0) break;
+    for (int p = 0; p < 2; ++p)
+      for (int r = p + 1; r < 3; ++r) {
+        const double apr = a[3 * p + r];
+        if (apr == 0) continue;
+        const double theta = (a[3 * r + r] - a[3 * p + p]) / (2 * apr);
+        const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1));
+        const double c = 1 / std::sqrt(t * t + 1), sn = t * c;
+        for (int k = 0; k < 3; ++k) {  // a = J^T a J
+          const double akp = a[3 * k + p], akr = a[3 * k + r];
+          a[3 * k + p] = c * akp - sn * akr;
+          a[3 * k + r] = sn * akp + c * akr;
+        }
+        for (int k = 0; k < 3; ++k) {
+          const double apk = a[3 * p + k], ark = a[3 * r + k];
+          a[3 * p + k] = c * apk - sn * ark;
+          a[3 * r + k] = sn * apk + c * ark;
+        }
+        for (int k = 0; k < 3; ++k) {
+          const double qkp = q[3 * k + p], qkr = q[3 * k + r];
+          q[3 * k + p] = c * qkp - sn * qkr;
+          q[3 * k + r] = sn * qkp + c * qkr;
+        }
+      }
+  }
+  std::array<int, 3> idx = {0, 1, 2};
+  std::sort(idx.begin(), idx.end(), [&](int x, int y) { return a[4 * x] > a[4 * y] || (a[4 * x] == a[4 * y] && x < y); });
+  for (int i = 0; i < 3; ++i) {
+    w[i] = a[4 * idx[i]];
+    v[i] = Vec3{q[idx[i]], q[3 + idx[i]], q[6 + idx[i]]};
+  }
+  v[2] = cross(v[0], v[1]);
+}
+
 class Improver {
  public:
   Improver(Mesh& mesh, const std::vector<std::uint8_t>& fixed, const ScalarField* field,
@@ -116,6 +163,7 @@ class Improver {
       t_[t] = {mesh.triangles[3 * t], mesh.triangles[3 * t + 1], mesh.triangles[3 * t + 2]};
     fixed_.assign(nv, 0);
     for (std::size_t v = 0; v < std::min(nv, fixed.size()); ++v) fixed_[v] = fixed[v];
+    speck_.assign(nv, 0);
     tri_alive_.assign(nt, 1);
     dirty_.assign(nv, 1);
     dev_ = o_.max_deviation > 0 ? o_.max_deviation : 0.25 * o_.voxel;
@@ -150,6 +198,11 @@ class Improver {
     // Splits give back the triangles collapses took (the budget holds), then a last flip pass:
     // the final moves and splits can leave flippable pairs.
     tick_.poll(static_cast<double>(o_.rounds) / (o_.rounds + 1));
+    // Specks and border needles before the splits: the budget holds.
+    if (o_.rescue_below_deg > 0) {
+      replace_specks(st);
+      st.collapses += collapse_border_needles(o_.rescue_below_deg * kDeg);
+    }
     if (o_.target_triangles > 0) st.splits = split_pass(o_.target_triangles);
     st.flips += flip_pass();
     if (o_.untangle) {
@@ -159,6 +212,7 @@ class Improver {
       untangle(st);
       st.intersections_before = first;
     }
+    if (o_.rescue_below_deg > 0) rescue(st);
     measure(st.min_angle_after_deg, st.pct_below_20_after);
     return st;
   }
@@ -207,6 +261,7 @@ class Improver {
   std::vector<Vec3> p_;
   std::vector<Tri> t_;
   std::vector<std::uint8_t> fixed_, boundary_, tri_alive_;
+  std::vector<std::uint8_t> speck_;  // per vertex: a speck's replacement (replace_specks) — stays
   std::vector<std::uint8_t> dirty_;  // per vertex: its ring changed since the last move pass
   std::vector<std::uint32_t> inc_off_, inc_;  // vertex -> alive triangles (CSR)
 
@@ -409,7 +464,7 @@ class Improver {
                                      [&](const tbb::blocked_range<std::uint32_t>& r) {
         std::vector<std::uint32_t>& na = nbrs.local();
         for (std::uint32_t v = r.begin(); v != r.end(); ++v) {
-          if (!sel[v] || fixed_[v] || boundary_[v] || inc_off_[v] == inc_off_[v + 1]) continue;
+          if (!sel[v] || fixed_[v] || boundary_[v] || speck_[v] || inc_off_[v] == inc_off_[v + 1]) continue;
           neighbours(v, na);
           if (na.empty()) continue;
           Vec3 q{};
@@ -554,6 +609,7 @@ class Improver {
   bool split_edge(std::uint32_t t1, std::uint8_t k1, std::uint32_t t2, std::uint8_t k2) {
     const std::uint32_t a = t_[t1][k1], b = t_[t1][(k1 + 1) % 3], x = t_[t1][(k1 + 2) % 3];
     const std::uint32_t y = t_[t2][(k2 + 2) % 3];
+    if (speck_[a] || speck_[b]) return false;
     Vec3 m = 0.5 * (p_[a] + p_[b]);
     Vec3 q = m;
     if (project(q, 0.25 * distance(p_[a], p_[b])) && distance(q, m) < 0.25 * distance(p_[a], p_[b]))
@@ -569,6 +625,7 @@ class Improver {
     fixed_.push_back(0);
     dirty_.push_back(1);
     boundary_.push_back(0);
+    speck_.push_back(0);
     t_[t1] = {a, mv, x};
     t_[t2] = {b, mv, y};
     t_.push_back({mv, b, x});
@@ -645,7 +702,7 @@ class Improver {
                const std::vector<std::uint64_t>& existing) const {
     const std::uint32_t a = t_[t1][k1], b = t_[t1][(k1 + 1) % 3], x = t_[t1][(k1 + 2) % 3];
     const std::uint32_t y = t_[t2][(k2 + 2) % 3];
-    if (x == y) return false;
+    if (x == y || speck_[a] || speck_[b]) return false;
     const Vec3 &pa = p_[a], &pb = p_[b], &px = p_[x], &py = p_[y];
     const double old_min = std::min(min_angle(pa, pb, px), min_angle(pb, pa, py));
     if (old_min >= o_.target_angle_deg * kDeg) return false;
@@ -744,7 +801,7 @@ class Improver {
   /// boundary, well shaped already, or no step improves its ring's smallest angle within the
   /// bounds). Reads the mesh only.
   bool plan_move(std::uint32_t v, Vec3& to) const {
-    if (fixed_[v] || boundary_[v] || inc_off_[v + 1] == inc_off_[v]) return false;
+    if (fixed_[v] || boundary_[v] || speck_[v] || inc_off_[v + 1] == inc_off_[v]) return false;
     const double target = o_.target_angle_deg * kDeg;
     bool flipped = false;
     const Vec3 pv = p_[v];
@@ -908,7 +965,7 @@ class Improver {
   /// the deviation bound of the removed vertex.
   bool remove_valence3(const Tri& tri, std::vector<std::uint8_t>& busy) {
     for (std::uint32_t v : tri) {
-      if (fixed_[v] || boundary_[v] || inc_off_[v + 1] - inc_off_[v] != 3) continue;
+      if (fixed_[v] || boundary_[v] || speck_[v] || inc_off_[v + 1] - inc_off_[v] != 3) continue;
       // Ring a -> b -> c around v from its three triangles (v, a, b), (v, b, c), (v, c, a).
       std::array<std::uint32_t, 3> next{}, from{};
       for (int i = 0; i < 3; ++i) {
@@ -1029,7 +1086,7 @@ class Improver {
   /// Which end of ab is kept: a, unless only b is fixed. False when the edge may not collapse
   /// whatever the tests say (a boundary end, both ends fixed).
   bool collapse_ends(std::uint32_t& a, std::uint32_t& b) const {
-    if (boundary_[a] || boundary_[b] || (fixed_[a] && fixed_[b])) return false;
+    if (boundary_[a] || boundary_[b] || speck_[a] || speck_[b] || (fixed_[a] && fixed_[b])) return false;
     if (fixed_[b]) std::swap(a, b);  // keep the fixed end where it is
     return true;
   }
@@ -1168,6 +1225,473 @@ class Improver {
     return collapses;
   }
 
+  /// Specks (docs/QUALITY.md "Rescue"): a closed component of sphere topology at most
+  /// kSpeckVoxels voxels long that still has a triangle below `rescue_below_deg` after the rounds
+  /// has no well-shaped mesh on its surface (a grain a few hundredths of a voxel thick): it becomes
+  /// a tetrahedron (when it had at most 6 triangles) or an octahedron inscribed in its principal
+  /// box, the box's thin sides grown until every angle is at least 25°. The new vertices stay
+  /// where they are in the later passes; a speck whose new triangles cross another triangle keeps
+  /// its old ones.
+  void replace_specks(ImproveStats& st) {
+    build_incidence();
+    const std::size_t nv = p_.size(), nt0 = t_.size();
+    const double floor = o_.rescue_below_deg * kDeg;
+    std::vector<std::uint32_t> parent(nv);
+    for (std::uint32_t v = 0; v < nv; ++v) parent[v] = v;
+    auto find = [&](std::uint32_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    for (std::size_t t = 0; t < nt0; ++t) {
+      if (!tri_alive_[t]) continue;
+      for (int k = 1; k < 3; ++k) {
+        const std::uint32_t a = find(t_[t][0]), b = find(t_[t][k]);
+        if (a != b) parent[std::max(a, b)] = std::min(a, b);
+      }
+    }
+    std::vector<std::uint32_t> count(nv, 0);
+    for (std::size_t t = 0; t < nt0; ++t)
+      if (tri_alive_[t]) ++count[find(t_[t][0])];
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> members;  // (root, triangle)
+    for (std::size_t t = 0; t < nt0; ++t)
+      if (tri_alive_[t]) {
+        const std::uint32_t r = find(t_[t][0]);
+        if (count[r] <= kSpeckMaxTriangles) members.push_back({r, static_cast<std::uint32_t>(t)});
+      }
+    std::sort(members.begin(), members.end());
+    std::vector<SpeckDone> done;
+    for (std::size_t i = 0; i < members.size();) {
+      std::size_t j = i;
+      while (j < members.size() && members[j].first == members[i].first) ++j;
+      std::vector<std::uint32_t> tris;
+      for (std::size_t k = i; k < j; ++k) tris.push_back(members[k].second);
+      i = j;
+      tick_.tick();
+      if (auto d = speck(tris, floor)) done.push_back(std::move(*d));
+    }
+    if (done.empty()) return;
+    // New triangles that cross others: that speck keeps its old triangles.
+    std::vector<std::uint32_t> id;
+    Mesh m = snapshot(id);
+    std::vector<std::uint8_t> involved(m.num_triangles(), 0);
+    std::vector<std::int32_t> owner(t_.size(), -1);
+    for (std::size_t s = 0; s < done.size(); ++s)
+      for (std::uint32_t t = done[s].first_tri; t < done[s].first_tri + done[s].n_tris; ++t)
+        owner[t] = static_cast<std::int32_t>(s);
+    for (std::size_t k = 0; k < id.size(); ++k) involved[k] = owner[id[k]] >= 0;
+    const auto pairs = intersecting_pairs_involving(m, involved, ctx_);
+    std::vector<std::uint8_t> undo(done.size(), pairs ? 0 : 1);
+    if (pairs)
+      for (const auto& [a, b] : *pairs)
+        for (auto t : {a, b})
+          if (owner[id[t]] >= 0) undo[owner[id[t]]] = 1;
+    for (std::size_t s = 0; s < done.size(); ++s) {
+      if (!undo[s]) {
+        ++st.specks;
+        continue;
+      }
+      ++st.specks_undone;
+      for (std::uint32_t t = done[s].first_tri; t < done[s].first_tri + done[s].n_tris; ++t)
+        tri_alive_[t] = 0;
+      for (auto t : done[s].old_tris) tri_alive_[t] = 1;
+    }
+    build_incidence();
+  }
+
+  struct SpeckDone {
+    std::vector<std::uint32_t> old_tris;
+    std::uint32_t first_tri, n_tris;
+  };
+
+  /// One speck candidate (its alive triangles): replaced when it qualifies (see replace_specks).
+  std::optional<SpeckDone> speck(const std::vector<std::uint32_t>& tris, double floor) {
+    std::vector<std::uint32_t> vs;
+    bool bad = false;
+    for (auto t : tris) {
+      bad |= tri_min_angle(t_[t]) < floor;
+      for (auto v : t_[t]) vs.push_back(v);
+    }
+    if (!bad) return std::nullopt;
+    std::sort(vs.begin(), vs.end());
+    vs.erase(std::unique(vs.begin(), vs.end()), vs.end());
+    for (auto v : vs)
+      if (fixed_[v] || boundary_[v] || speck_[v]) return std::nullopt;
+    std::vector<std::uint64_t> edges;
+    for (auto t : tris)
+      for (int k = 0; k < 3; ++k) edges.push_back(edge_key(t_[t][k], t_[t][(k + 1) % 3]));
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    if (vs.size() + tris.size() != edges.size() + 2) return std::nullopt;  // sphere: V - E + F = 2
+    // Principal box of the vertices.
+    Vec3 mean{};
+    for (auto v : vs) mean += p_[v];
+    mean = (1.0 / static_cast<double>(vs.size())) * mean;
+    std::array<double, 9> cov{};
+    for (auto v : vs) {
+      const Vec3 d = p_[v] - mean;
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) cov[3 * r + c] += d[r] * d[c];
+    }
+    std::array<double, 3> w{};
+    std::array<Vec3, 3> ax{};
+    symmetric_eigen(cov, w, ax);
+    std::array<double, 3> lo{}, hi{};
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::numeric_limits<double>::max();
+      hi[a] = std::numeric_limits<double>::lowest();
+      for (auto v : vs) {
+        const double x = dot(p_[v] - mean, ax[a]);
+        lo[a] = std::min(lo[a], x);
+        hi[a] = std::max(hi[a], x);
+      }
+    }
+    Vec3 centre = mean;
+    std::array<double, 3> h{};
+    for (int a = 0; a < 3; ++a) {
+      centre += (0.5 * (lo[a] + hi[a])) * ax[a];
+      h[a] = 0.5 * (hi[a] - lo[a]);
+    }
+    if (2 * h[0] > kSpeckVoxels * o_.voxel || h[0] <= 0) return std::nullopt;
+    const bool tetra = tris.size() <= 6;
+    static constexpr std::array<std::array<int, 3>, 4> kTetra = {{{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}}};
+    static constexpr std::array<std::array<int, 3>, 8> kOcta = {
+        {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}}};
+    std::vector<Vec3> q;
+    std::vector<std::array<int, 3>> f;
+    if (tetra) f.assign(kTetra.begin(), kTetra.end());
+    else f.assign(kOcta.begin(), kOcta.end());
+    auto build = [&] {
+      q.clear();
+      if (tetra) {
+        for (const auto& sg : {std::array<double, 3>{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}})
+          q.push_back(centre + (sg[0] * h[0]) * ax[0] + (sg[1] * h[1]) * ax[1] + (sg[2] * h[2]) * ax[2]);
+      } else {
+        for (int a = 0; a < 3; ++a) {
+          q.push_back(centre + h[a] * ax[a]);
+          q.push_back(centre - h[a] * ax[a]);
+        }
+      }
+      // The octahedron's order: +e0, -e0, +e1, -e1, +e2, -e2 (kOcta's numbering).
+      double mn = std::numbers::pi;
+      for (const auto& tri : f) mn = std::min(mn, min_angle(q[tri[0]], q[tri[1]], q[tri[2]]));
+      return mn;
+    };
+    double mn = build();
+    for (int it = 0; it < 60 && mn < kSpeckAngleDeg * kDeg; ++it) {
+      int k = 0;
+      for (int a = 1; a < 3; ++a)
+        if (h[a] < h[k]) k = a;
+      h[k] = std::max(1.2 * h[k], 0.02 * h[0]);
+      mn = build();
+    }
+    if (mn < kSpeckAngleDeg * kDeg) return std::nullopt;
+    for (const Vec3& x : q)
+      if (!inside_box(x)) return std::nullopt;
+    // Orientation: the speck's triangles enclose a positive or a negative volume; so do the new.
+    auto volume = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
+      return dot(a - centre, cross(b - centre, c - centre));
+    };
+    double v_old = 0, v_new = 0;
+    for (auto t : tris) v_old += volume(p_[t_[t][0]], p_[t_[t][1]], p_[t_[t][2]]);
+    for (const auto& tri : f) v_new += volume(q[tri[0]], q[tri[1]], q[tri[2]]);
+    if ((v_old > 0) != (v_new > 0))
+      for (auto& tri : f) std::swap(tri[1], tri[2]);
+    SpeckDone d;
+    d.old_tris = tris;
+    d.first_tri = static_cast<std::uint32_t>(t_.size());
+    d.n_tris = static_cast<std::uint32_t>(f.size());
+    for (auto t : tris) tri_alive_[t] = 0;
+    const auto base = static_cast<std::uint32_t>(p_.size());
+    for (const Vec3& x : q) {
+      p_.push_back(x);
+      fixed_.push_back(0);
+      dirty_.push_back(0);
+      boundary_.push_back(0);
+      speck_.push_back(1);
+    }
+    for (const auto& tri : f) {
+      t_.push_back({base + tri[0], base + tri[1], base + tri[2]});
+      tri_alive_.push_back(1);
+    }
+    return d;
+  }
+
+  /// Off-surface rescue of the triangles below `rescue_below_deg` (ImproveOptions): their
+  /// vertices move in 3-D by compass search (steps along the ring's normal, two tangents and
+  /// toward the equilateral apexes; the best that raises the ring's smallest angle within the
+  /// bounds is taken, else the step halves), in index order, a few rounds; then the moves that
+  /// made triangles intersect go back.
+  void rescue(ImproveStats& st) {
+    const double floor = o_.rescue_below_deg * kDeg;
+    std::vector<std::uint8_t> moved(p_.size(), 0);
+    std::vector<double> reach(p_.size(), std::numeric_limits<double>::infinity());
+    build_incidence();
+    // A move that made triangles cross goes back and the vertex tries again with half the
+    // reach (a fold near the vertex often leaves room for a shorter move).
+    for (int attempt = 0; attempt < 3; ++attempt) {
+      std::vector<std::pair<std::uint32_t, Vec3>> from;  // vertex, position before this attempt
+      std::vector<std::uint8_t> in_from(p_.size(), 0);
+      for (int round = 0; round < 4; ++round) {
+        tick_.check();
+        std::vector<std::uint8_t> sel(p_.size(), 0);
+        for (std::size_t t = 0; t < t_.size(); ++t)
+          if (tri_alive_[t] && tri_min_angle(t_[t]) < floor)
+            for (auto v : t_[t]) sel[v] = 1;
+        std::size_t n = 0;
+        for (std::uint32_t v = 0; v < p_.size(); ++v) {
+          if (!sel[v]) continue;
+          tick_.tick();
+          const Vec3 old = p_[v];
+          if (!rescue_vertex(v, reach[v])) continue;
+          if (!in_from[v]) from.push_back({v, old});
+          in_from[v] = 1;
+          ++n;
+        }
+        if (n == 0) break;
+      }
+      std::vector<Vec3> to(from.size());
+      for (std::size_t i = 0; i < from.size(); ++i) to[i] = p_[from[i].first];
+      const std::size_t undone = undo_crossing_moves(from);
+      for (std::size_t i = 0; i < from.size(); ++i) {
+        const std::uint32_t v = from[i].first;
+        if (p_[v] == from[i].second) reach[v] = 0.5 * distance(to[i], from[i].second);
+        else moved[v] = 1;
+      }
+      st.rescue_undone += undone;
+      if (undone == 0) break;
+    }
+    st.rescued = static_cast<std::size_t>(std::count(moved.begin(), moved.end(), 1));
+  }
+
+  /// Box faces v lies on (per axis).
+  std::array<bool, 3> pinned_axes(std::uint32_t v) const {
+    std::array<bool, 3> pinned{};
+    if (!has_box_) return pinned;
+    for (int a = 0; a < 3; ++a) {
+      const double eps = 1e-9 * (o_.box.hi[a] - o_.box.lo[a]);
+      pinned[a] = std::abs(p_[v][a] - o_.box.lo[a]) <= eps || std::abs(p_[v][a] - o_.box.hi[a]) <= eps;
+    }
+    return pinned;
+  }
+
+  /// Border needles: a triangle below the floor whose shortest edge (under half the next) runs
+  /// along the mesh boundary between two vertices on the same box face loses that edge — the two
+  /// merge at either end or at the midpoint (all on the face), the best-shaped that raises the
+  /// smallest angle around them, when the boundary edge's only common neighbour is the opposite
+  /// vertex and the boundary loop keeps more than three edges (the topology stays).
+  std::size_t collapse_border_needles(double floor) {
+    build_incidence();
+    std::vector<std::uint8_t> busy(p_.size(), 0);
+    std::size_t n = 0;
+    for (std::size_t t = 0; t < t_.size(); ++t) {
+      if (!tri_alive_[t]) continue;
+      const Tri tri = t_[t];
+      if (busy[tri[0]] || busy[tri[1]] || busy[tri[2]]) continue;
+      const double old_min = tri_min_angle(tri);
+      if (old_min >= floor) continue;
+      std::array<double, 3> len{};
+      for (int k = 0; k < 3; ++k) len[k] = distance(p_[tri[k]], p_[tri[(k + 1) % 3]]);
+      int k = 0;
+      for (int j = 1; j < 3; ++j)
+        if (len[j] < len[k]) k = j;
+      if (!(len[k] < 0.5 * std::min(len[(k + 1) % 3], len[(k + 2) % 3]))) continue;
+      std::uint32_t a = tri[k], b = tri[(k + 1) % 3];
+      const std::uint32_t c = tri[(k + 2) % 3];
+      if (!boundary_[a] || !boundary_[b] || speck_[a] || speck_[b]) continue;
+      // ab is a boundary edge: t is its only triangle.
+      std::size_t on_ab = 0;
+      for (std::uint32_t i = inc_off_[a]; i < inc_off_[a + 1]; ++i) {
+        const Tri& u = t_[inc_[i]];
+        on_ab += u[0] == b || u[1] == b || u[2] == b;
+      }
+      if (on_ab != 1 || inc_off_[c + 1] - inc_off_[c] < 2) continue;
+      const auto pa = pinned_axes(a), pb = pinned_axes(b);
+      const int na = pa[0] + pa[1] + pa[2], nb = pb[0] + pb[1] + pb[2];
+      bool same_face = false;
+      for (int ax = 0; ax < 3; ++ax) same_face |= pa[ax] && pb[ax] && p_[a][ax] == p_[b][ax];
+      if (!same_face || (na > 1 && nb > 1)) continue;
+      if (nb > 1) std::swap(a, b);  // a box-edge vertex stays where it is
+      neighbours(a, rings_.na);
+      neighbours(b, rings_.nb);
+      rings_.common.clear();
+      std::set_intersection(rings_.na.begin(), rings_.na.end(), rings_.nb.begin(), rings_.nb.end(),
+                            std::back_inserter(rings_.common));
+      if (rings_.common.size() != 1) continue;
+      // The loop keeps more than three edges: a's and b's other boundary neighbours differ.
+      auto other_boundary_neighbour = [&](std::uint32_t x, std::uint32_t y) {
+        std::vector<std::uint32_t> nx;
+        neighbours(x, nx);
+        for (auto w : nx) {
+          if (w == y || !boundary_[w]) continue;
+          std::size_t shared = 0;
+          for (std::uint32_t i = inc_off_[x]; i < inc_off_[x + 1]; ++i) {
+            const Tri& u = t_[inc_[i]];
+            shared += u[0] == w || u[1] == w || u[2] == w;
+          }
+          if (shared == 1) return w;
+        }
+        return UINT32_MAX;
+      };
+      const std::uint32_t wa = other_boundary_neighbour(a, b), wb = other_boundary_neighbour(b, a);
+      if (wa == UINT32_MAX || wa == wb) continue;
+      double ring_min = std::numbers::pi;
+      for (auto v : {a, b})
+        for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i)
+          ring_min = std::min(ring_min, tri_min_angle(t_[inc_[i]]));
+      std::array<Vec3, 3> at = {p_[a], p_[b], 0.5 * (p_[a] + p_[b])};
+      const int n_at = na > 1 ? 1 : 3;
+      double best = ring_min;
+      int pick = -1;
+      for (int i = 0; i < n_at; ++i) {
+        const double m = merged_min_angle(a, b, at[i]);
+        if (m <= best || !inside_box(at[i])) continue;
+        if (!ring_error_ok(a, at[i]) || !ring_error_ok(b, at[i])) continue;
+        best = m;
+        pick = i;
+      }
+      if (pick < 0) continue;
+      commit_collapse(a, b, at[pick], rings_, busy);
+      ++n;
+    }
+    if (n) build_incidence();
+    return n;
+  }
+
+  /// Largest distance to the surface of the points around v with v at q: q, the midpoints of
+  /// v's edges and the centroids of its triangles (infinity where a projection fails). `orient`
+  /// (one per triangle around v): the side of the surface each triangle faces, the sign of its
+  /// normal against ∇f where its centroid projects (0: unknown); `learn` sets them, else a
+  /// triangle that turned to the other side makes the result infinite (a thin speck's triangles
+  /// may turn far, which the usual 70° guard forbids, but never inside out).
+  double ring_deviation(std::uint32_t v, const Vec3& q, std::vector<std::int8_t>& orient,
+                        bool learn) const {
+    if (!field_) return 0;
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    double e = 0;
+    ProjectOptions po;
+    po.max_steps = 8;
+    po.tolerance = 1e-3 * o_.voxel;
+    const std::uint32_t nt = inc_off_[v + 1] - inc_off_[v];
+    for (std::uint32_t i = 0; i < nt; ++i) {
+      const Tri& t = t_[inc_[inc_off_[v] + i]];
+      const int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+      const Vec3 &a = p_[t[(k + 1) % 3]], &b = p_[t[(k + 2) % 3]];
+      const double len = std::max(distance(q, a), distance(q, b));
+      po.max_step = std::max(0.5 * len, o_.voxel);
+      e = std::max(e, surface_distance(0.5 * (q + a), po.max_step));
+      const Vec3 g = (q + a + b) / 3.0;
+      const ProjectResult r = project_to_iso(*field_, iso_, g, po);
+      if (r.residual > 0.1 * dev_) return kInf;
+      e = std::max(e, distance(g, r.point));
+      const double side = dot(tri_normal(q, a, b), r.gradient);
+      const std::int8_t s = side > 0 ? 1 : side < 0 ? -1 : 0;
+      if (learn) orient[i] = s;
+      else if (orient[i] != 0 && s != orient[i]) return kInf;
+      if (!std::isfinite(e)) return e;
+    }
+    return std::max(e, surface_distance(q, o_.voxel));
+  }
+
+  /// One vertex's compass search, at most `reach` from where it is; true when it moved.
+  bool rescue_vertex(std::uint32_t v, double reach) {
+    const std::uint32_t nt = inc_off_[v + 1] - inc_off_[v];
+    if (nt == 0 || speck_[v]) return false;
+    // Box faces the vertex lies on: it stays on them (a border vertex slides along its face).
+    std::array<bool, 3> pinned{};
+    bool on_face = false;
+    if (has_box_)
+      for (int a = 0; a < 3; ++a) {
+        const double eps = 1e-9 * (o_.box.hi[a] - o_.box.lo[a]);
+        pinned[a] = std::abs(p_[v][a] - o_.box.lo[a]) <= eps || std::abs(p_[v][a] - o_.box.hi[a]) <= eps;
+        on_face |= pinned[a];
+      }
+    if ((fixed_[v] || boundary_[v]) && !on_face) return false;
+    const Vec3 start = p_[v];
+    // The ring's normals at the start: no triangle may turn by more than ~70° from them.
+    std::vector<Vec3> n0(nt);
+    Vec3 n{};
+    double lsum = 0;
+    Vec3 goal{};
+    for (std::uint32_t i = 0; i < nt; ++i) {
+      const Tri& t = t_[inc_[inc_off_[v] + i]];
+      const int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+      const Vec3 &a = p_[t[(k + 1) % 3]], &b = p_[t[(k + 2) % 3]];
+      const Vec3 tn = tri_normal(start, a, b);
+      n0[i] = normalized(tn);
+      n += tn;
+      lsum += distance(start, a);
+      const Vec3 e = b - a;
+      const Vec3 side = normalized(cross(n0[i], e));
+      goal += (1.0 / nt) * (0.5 * (a + b) + (std::sqrt(3.0) / 2) * norm(e) * side);
+    }
+    n = normalized(n);
+    if (norm2(n) == 0) return false;
+    auto ring_score = [&](const Vec3& q) {
+      double mn = std::numbers::pi;
+      for (std::uint32_t i = 0; i < nt; ++i) {
+        const Tri& t = t_[inc_[inc_off_[v] + i]];
+        Vec3 x[3] = {p_[t[0]], p_[t[1]], p_[t[2]]};
+        for (int j = 0; j < 3; ++j)
+          if (t[j] == v) x[j] = q;
+        const Vec3 tn = normalized(tri_normal(x[0], x[1], x[2]));
+        if (!field_ && (dot(tn, n0[i]) < 0.35 || dot(tn, n) <= 0)) return -1.0;
+        if (norm2(tn) == 0) return -1.0;
+        mn = std::min(mn, min_angle(x[0], x[1], x[2]));
+      }
+      return mn;
+    };
+    std::vector<std::int8_t> orient(nt, 0);
+    const double dev0 = ring_deviation(v, start, orient, true);
+    const double tol = std::isfinite(dev0) ? std::max(dev_, dev0) : dev_;
+    auto admissible = [&](const Vec3& q) {
+      if (!inside_box(q) || distance(q, start) > reach) return false;
+      if (o_.max_error > 0 && !ring_error_ok(v, q)) return false;
+      return ring_deviation(v, q, orient, false) <= tol;
+    };
+    Vec3 t1 = cross(n, std::abs(n.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0});
+    t1 = normalized(t1);
+    const Vec3 t2 = cross(n, t1);
+    std::array<Vec3, 7> dirs = {t1, -1.0 * t1, t2, -1.0 * t2, n, -1.0 * n, goal - start};
+    for (Vec3& d : dirs) {
+      for (int a = 0; a < 3; ++a)
+        if (pinned[a]) d[a] = 0;
+      d = normalized(d);
+    }
+    const double target = o_.target_angle_deg * kDeg;
+    double cur = ring_score(start);
+    if (cur < 0) return false;
+    double h = 0.25 * lsum / nt;
+    const double h_min = 0.02 * h;
+    Vec3 p = start;
+    for (int it = 0; it < 40 && h >= h_min && cur < target; ++it) {
+      std::array<std::pair<double, int>, 7> cand{};
+      for (int i = 0; i < 7; ++i) {
+        if (norm2(dirs[i]) == 0) {
+          cand[i] = {-1, i};
+          continue;
+        }
+        cand[i] = {ring_score(p + h * dirs[i]), i};
+      }
+      std::sort(cand.begin(), cand.end(), [](const auto& x, const auto& y) {
+        return x.first != y.first ? x.first > y.first : x.second < y.second;
+      });
+      bool step = false;
+      for (const auto& [score, i] : cand) {
+        if (score < cur + 0.01 * kDeg) break;
+        const Vec3 q = p + h * dirs[i];
+        if (!admissible(q)) continue;
+        p = q;
+        cur = score;
+        step = true;
+        break;
+      }
+      if (!step) h *= 0.5;
+    }
+    if (p == start) return false;
+    p_[v] = p;
+    return true;
+  }
+
  private:
   std::vector<std::uint32_t> na_;
   Rings rings_;
@@ -1195,7 +1719,7 @@ ImproveStats improve_mesh(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
   return in_arena(context, [&] {
     Improver imp(mesh, fixed, field, iso, options, context, "improve");
     const ImproveStats st = imp.run();
-    imp.write(mesh, st.collapses > 0, vertex_map);
+    imp.write(mesh, st.collapses + st.specks + st.specks_undone > 0, vertex_map);
     mesh.normals.clear();
     return st;
   });
