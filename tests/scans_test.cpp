@@ -27,20 +27,22 @@ struct Scan {
 };
 
 // Every shared scan small enough for ctest; the large ones (lidc2, frog, embryo) are in the
-// benchmark's scans table. Measured at 20k on 2026-12-02 (below 20° / smallest angle / pairs):
-// CT head 0.67 % / 1.5° / 26, skull 1.10 % / 0.24° / 84, MRI head 1.55 % / 0.38° / 286,
-// ironprot 0.05 % / 15.7° / 0, neghip 0.06 % / 9.0° / 53, hydrogen 0 % / 23.7° / 0, carotid
-// 0.17 % / 8.9° / 54, bolt and vase 0 % / 23.8° / 0.
+// benchmark's scans table. Measured at 20k on 2026-12-03, with the rescue (below 20° / smallest
+// angle / pairs; docs/QUALITY.md "Rescue"): CT head 0.09 % / 5.4° / 20, skull 0.14 % / 7.8° / 58,
+// MRI head 0.38 % / 5.8° / 234, ironprot 0 % / 20.1° / 0, neghip 0.01 % / 18.6° / 53, hydrogen
+// 0 % / 23.7° / 0, carotid 0 % / 20.0° / 47, bolt and vase 0 % / 23.3° / 0. The share under 20°
+// is asserted at issue 12's target (< 1 %) everywhere; the smallest angle at the measured value
+// less a margin (the 10° target is not met on the CT and MRI heads: docs/QUALITY.md).
 const Scan kScans[] = {
-    {"ct_headsq/quarter.nhdr", 500.5, 1.0, 1.0, 1.0},
-    {"ct_headsq/quarter.nhdr", 1150.5, 1.5, 0.1, 1.0},
-    {"mri_headmr/HeadMRVolume.mhd", 20.5, 2.0, 0.2, 2.0},
-    {"ironprot/ironProt.vtk", 128.5, 0.5, 10.0, 1.0},
-    {"neghip/neghip.slc", 100.5, 0.5, 5.0, 1.0},
-    {"hydrogen/hydrogen.vti", 0.1, 0.5, 20.0, 1.0},
-    {"carotid/carotid.vtk", 200.5, 0.5, 5.0, 1.0},
-    {"bolt/bolt.slc", 128.5, 0.5, 20.0, 1.0},
-    {"vase/vase.vti", 128.5, 0.5, 20.0, 1.0},
+    {"ct_headsq/quarter.nhdr", 500.5, 1.0, 3.0, 1.0},
+    {"ct_headsq/quarter.nhdr", 1150.5, 1.0, 4.0, 1.0},
+    {"mri_headmr/HeadMRVolume.mhd", 20.5, 1.0, 3.0, 2.0},
+    {"ironprot/ironProt.vtk", 128.5, 1.0, 15.0, 1.0},
+    {"neghip/neghip.slc", 100.5, 1.0, 12.0, 1.0},
+    {"hydrogen/hydrogen.vti", 0.1, 1.0, 20.0, 1.0},
+    {"carotid/carotid.vtk", 200.5, 1.0, 15.0, 1.0},
+    {"bolt/bolt.slc", 128.5, 1.0, 20.0, 1.0},
+    {"vase/vase.vti", 128.5, 1.0, 20.0, 1.0},
 };
 
 class ScanTest : public ::testing::TestWithParam<Scan> {};
@@ -115,7 +117,7 @@ TEST(ScanBounds, DecimatedBudgetIsWellShaped) {
   const auto st = run_cli("stats " + tmp.file("a.ply") + " --json");
   ASSERT_EQ(st.exit_code, 0);
   const auto q = nlohmann::json::parse(st.out);
-  EXPECT_LE(q["pct_min_angle_below"]["20"].get<double>(), 7.0);
+  EXPECT_LE(q["pct_min_angle_below"]["20"].get<double>(), 2.0);  // 1.26 % on 2026-12-03
   EXPECT_EQ(q["degenerate_triangles"].get<int>(), 0);
 }
 
