@@ -86,8 +86,6 @@ TEST(Improve, FixedVerticesStayAndTheBoxHolds) {
   }
 }
 
-/// Base mesh of a sampled noisy shape: the improvement keeps the topology and the count, puts
-/// the moved vertices on the surface and raises the smallest angles.
 // A speck (docs/QUALITY.md "Rescue"): a closed needle 0.18 long and 0.008 thick — under two
 // voxels of 0.1 — has no well-shaped mesh on its surface. The rescue replaces it with a
 // tetrahedron in its principal box: sphere topology and orientation kept, every angle ≥ 25°,
@@ -125,7 +123,34 @@ TEST(Improve, RescueReplacesASpeckKeepingTopologyAndOrientation) {
   EXPECT_LT(plain.min_angle_after_deg, 10);  // on the surface, nothing fixes it
   EXPECT_EQ(plain.specks, 0u);
   o.rescue_below_deg = 20;
-  const ImproveStats st = improve_mesh(m, {}, f.get(), 0.0, o);
+  // A fixed triangle elsewhere: its flags follow the renumbering (remap_vertex_flags).
+  const Vec3 far[3] = {{0.5, 0.5, 0.5}, {0.6, 0.5, 0.5}, {0.5, 0.6, 0.5}};
+  for (const Vec3& p : far) m.add_vertex(p);
+  m.add_triangle(5, 6, 7);
+  std::vector<std::uint8_t> fixed(8, 0);
+  fixed[5] = fixed[6] = fixed[7] = 1;
+  std::vector<std::uint32_t> map;
+  const ImproveStats st = improve_mesh(m, fixed, f.get(), 0.0, o, &map);
+  const std::vector<std::uint8_t> kept = remap_vertex_flags(fixed, map, m.num_vertices());
+  ASSERT_EQ(kept.size(), m.num_vertices());
+  int flagged = 0;
+  for (std::size_t v = 0; v < m.num_vertices(); ++v)
+    if (kept[v]) {
+      ++flagged;
+      const Vec3 p = m.vertex(v);
+      EXPECT_LT(std::min({distance(p, far[0]), distance(p, far[1]), distance(p, far[2])}), 1e-6) << v;
+    }
+  EXPECT_EQ(flagged, 3);
+  ASSERT_EQ(m.num_triangles(), 5u);
+  {  // the speck alone
+    Mesh speck;
+    speck.positions = m.positions;
+    for (std::size_t t = 0; t < m.num_triangles(); ++t)
+      if (!kept[m.triangles[3 * t]])
+        speck.add_triangle(m.triangles[3 * t], m.triangles[3 * t + 1], m.triangles[3 * t + 2]);
+    for (auto& i : speck.triangles) ASSERT_FALSE(kept[i]);
+    m = std::move(speck);
+  }
   EXPECT_EQ(st.specks, 1u);
   EXPECT_EQ(m.num_triangles(), 4u);
   const MeshTopo t = mesh_topo(m);
@@ -134,11 +159,13 @@ TEST(Improve, RescueReplacesASpeckKeepingTopologyAndOrientation) {
   EXPECT_TRUE(t.oriented);
   EXPECT_GT(volume(m), 0);
   EXPECT_GE(min_angle_deg(m), 25);
-  for (std::size_t v = 0; v < m.num_vertices(); ++v)
+  for (std::uint32_t v : m.triangles)
     EXPECT_LT(std::abs(signed_distance(*f, 0.0, m.vertex(v))), o.voxel);
 }
 
 
+/// Base mesh of a sampled noisy shape: the improvement keeps the topology and the count, puts
+/// the moved vertices on the surface and raises the smallest angles.
 TEST(Improve, NoisyBaseMeshKeepsTopologyAndGetsBetter) {
   // A sphere with voxel-scale bumps, sampled (not analytic: the trilinear field is bumpy).
   InputOptions io;

@@ -98,7 +98,9 @@ int cmd_level(const Argv& argv) {
     io.voxel = h.voxel;
     io.box = h.bounds;
     io.target_triangles = cut.mesh.num_triangles();
-    improve_mesh(cut.mesh, cut.vertex_border, nullptr, h.iso, io);
+    std::vector<std::uint32_t> map;
+    improve_mesh(cut.mesh, cut.vertex_border, nullptr, h.iso, io, &map);
+    cut.vertex_border = remap_vertex_flags(cut.vertex_border, map, cut.mesh.num_vertices());  // for --fit
     what += ", improved";
   }
   if (const auto spec = args.get("--fit")) {

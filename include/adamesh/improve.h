@@ -94,6 +94,13 @@ ImproveStats improve_mesh(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
                           std::vector<std::uint32_t>* vertex_map = nullptr,
                           const ExecutionContext& context = default_context());
 
+/// Per-vertex flags (e.g. a cut's border flags) carried through improve_mesh's `vertex_map`:
+/// entry map[v] of the result is flags[v]; vertices the improvement added are 0. Callers that
+/// keep flags beside the mesh need it: collapses, specks and splits renumber the vertices.
+std::vector<std::uint8_t> remap_vertex_flags(const std::vector<std::uint8_t>& flags,
+                                             const std::vector<std::uint32_t>& vertex_map,
+                                             std::size_t num_vertices);
+
 /// The same on a base mesh M0 before refinement (ALGORITHM.md leaves level 0 free until the blocks
 /// are built): border vertices stay, the per-vertex anchor/border/component arrays follow the
 /// renumbering. Moves are small (under ¾ of the shortest incident edge), so anchors stay valid

@@ -291,7 +291,10 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
         io.max_deviation = std::min(ro.max_error, 0.25 * io.voxel);
         io.max_error = ro.max_error;
       }
-      rep.improve = improve_mesh(cut.mesh, cut.vertex_border, in.field.get(), iso, io, nullptr, ctx);
+      std::vector<std::uint32_t> map;
+      rep.improve = improve_mesh(cut.mesh, cut.vertex_border, in.field.get(), iso, io, &map, ctx);
+      // The fit keeps the border vertices: their flags follow the renumbering.
+      cut.vertex_border = remap_vertex_flags(cut.vertex_border, map, cut.mesh.num_vertices());
       ctx.report("improve", 1);
       timings["improve"] = clock.lap();
     }

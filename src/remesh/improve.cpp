@@ -1725,6 +1725,15 @@ ImproveStats improve_mesh(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
   });
 }
 
+std::vector<std::uint8_t> remap_vertex_flags(const std::vector<std::uint8_t>& flags,
+                                             const std::vector<std::uint32_t>& vertex_map,
+                                             std::size_t num_vertices) {
+  std::vector<std::uint8_t> out(num_vertices, 0);
+  for (std::size_t v = 0; v < std::min(flags.size(), vertex_map.size()); ++v)
+    if (vertex_map[v] < num_vertices) out[vertex_map[v]] = flags[v];
+  return out;
+}
+
 ImproveStats improve_base_mesh(BaseMesh& base, const ScalarField* field, double iso,
                                const ImproveOptions& options, std::size_t decimate_to,
                                const ExecutionContext& context) {
