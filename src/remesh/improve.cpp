@@ -15,6 +15,10 @@
 //      the next) loses its shortest edge when the link condition holds (the two ends share only
 //      the two opposite vertices, both of valence > 3) and the smallest angle around the merged
 //      vertex rises with it at the projected midpoint or at either end (the best of the three).
+// With `rescue_below_deg` (the written meshes, docs/QUALITY.md "Rescue"), after the rounds:
+// specks become a tetrahedron or an octahedron, border needles lose their boundary edge, and
+// after the splits and the untangling the vertices of the triangles still below it move off the
+// surface within the deviation bound (then four times it for what is under 10°).
 // Flips and link-condition collapses keep the surface's topology; moves keep the connectivity.
 // Everything is serial and visits elements in a fixed order, so the result is deterministic.
 #include "adamesh/improve.h"
@@ -54,9 +58,13 @@ constexpr double kDecimateMinAngle = 15;
 constexpr double kUntangleMinAngle = 20;
 /// Specks (Improver::replace_specks): at most this long (voxels) and this many triangles, and
 /// their replacements have no angle below kSpeckAngleDeg.
-constexpr double kSpeckVoxels = 2;
-constexpr std::size_t kSpeckMaxTriangles = 64;
+constexpr double kSpeckVoxels = 5;
+constexpr std::size_t kSpeckMaxTriangles = 128;
 constexpr double kSpeckAngleDeg = 25;
+/// The rescue's last stage: triangles still under kRescueLastDeg, kRescueLastReach × the
+/// deviation bound.
+constexpr double kRescueLastDeg = 10;
+constexpr double kRescueLastReach = 4;
 /// Untangling moves make no edge shorter than this many voxels.
 constexpr double kUntangleMinEdge = 0.01;
 
@@ -256,6 +264,7 @@ class Improver {
   /// Cancellation and progress inside the passes (mutable: the const edge walk ticks too).
   mutable StageTicker tick_;
   double dev_ = 0;
+  double flip_below_ = 0;  ///< > 0: only pairs with a triangle below this flip (radians)
   bool has_box_ = false;
   bool small_moves_ = false;  ///< M0: every move under ¾ of the shortest incident edge
   std::vector<Vec3> p_;
@@ -705,7 +714,7 @@ class Improver {
     if (x == y || speck_[a] || speck_[b]) return false;
     const Vec3 &pa = p_[a], &pb = p_[b], &px = p_[x], &py = p_[y];
     const double old_min = std::min(min_angle(pa, pb, px), min_angle(pb, pa, py));
-    if (old_min >= o_.target_angle_deg * kDeg) return false;
+    if (old_min >= (flip_below_ > 0 ? flip_below_ : o_.target_angle_deg * kDeg)) return false;
     const double new_min = std::min(min_angle(pa, py, px), min_angle(pb, px, py));
     if (new_min < old_min + kDeg) return false;
     if (std::binary_search(existing.begin(), existing.end(), edge_key(x, y))) return false;
@@ -1387,6 +1396,12 @@ class Improver {
     if (mn < kSpeckAngleDeg * kDeg) return std::nullopt;
     for (const Vec3& x : q)
       if (!inside_box(x)) return std::nullopt;
+    if (o_.max_error > 0 && field_) {  // an explicit bound holds (or it is no worse than before)
+      double before = 0, after = 0;
+      for (auto t : tris) before = std::max(before, tri_error(p_[t_[t][0]], p_[t_[t][1]], p_[t_[t][2]]));
+      for (const auto& tri : f) after = std::max(after, tri_error(q[tri[0]], q[tri[1]], q[tri[2]]));
+      if (after > std::max(o_.max_error / kErrorSafety, before)) return std::nullopt;
+    }
     // Orientation: the speck's triangles enclose a positive or a negative volume; so do the new.
     auto volume = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
       return dot(a - centre, cross(b - centre, c - centre));
@@ -1422,17 +1437,38 @@ class Improver {
   /// bounds is taken, else the step halves), in index order, a few rounds; then the moves that
   /// made triangles intersect go back.
   void rescue(ImproveStats& st) {
-    const double floor = o_.rescue_below_deg * kDeg;
     std::vector<std::uint8_t> moved(p_.size(), 0);
-    std::vector<double> reach(p_.size(), std::numeric_limits<double>::infinity());
     build_incidence();
-    // A move that made triangles cross goes back and the vertex tries again with half the
-    // reach (a fold near the vertex often leaves room for a shorter move).
+    rescue_stage(o_.rescue_below_deg * kDeg, 1, moved, st);
+    // Last resort for what is still under 10°: four times the deviation bound (a cluster of
+    // vertices a few hundredths of a voxel apart at a tiny handle has no well-shaped mesh within
+    // a quarter voxel of the surface; CT head at 20k: 5.4° → 10.2°).
+    rescue_stage(kRescueLastDeg * kDeg, kRescueLastReach, moved, st);
+    st.rescued = static_cast<std::size_t>(std::count(moved.begin(), moved.end(), 1));
+  }
+
+  /// The vertices of the triangles below `floor` move (rescue_vertex, the deviation bound times
+  /// `widen`) in index order, four rounds; a move that made triangles cross goes back and the
+  /// vertex tries again with half the reach (a fold near the vertex often leaves room for a
+  /// shorter move), three attempts.
+  void rescue_stage(double floor, double widen, std::vector<std::uint8_t>& moved, ImproveStats& st) {
+    std::vector<double> reach(p_.size(), std::numeric_limits<double>::infinity());
     for (int attempt = 0; attempt < 3; ++attempt) {
       std::vector<std::pair<std::uint32_t, Vec3>> from;  // vertex, position before this attempt
       std::vector<std::uint8_t> in_from(p_.size(), 0);
       for (int round = 0; round < 4; ++round) {
         tick_.check();
+        if (widen > 1) {
+          // Flips of the pairs with a triangle below the floor, judged with the wider bound too
+          // (a flat cap whose long edge the quarter-voxel test kept: MRI head 1.0°).
+          const double dev = dev_;
+          dev_ *= widen;
+          flip_below_ = floor;
+          const std::size_t flips = flip_pass();
+          dev_ = dev;
+          flip_below_ = 0;
+          if (flips > 0) build_incidence();
+        }
         std::vector<std::uint8_t> sel(p_.size(), 0);
         for (std::size_t t = 0; t < t_.size(); ++t)
           if (tri_alive_[t] && tri_min_angle(t_[t]) < floor)
@@ -1442,7 +1478,7 @@ class Improver {
           if (!sel[v]) continue;
           tick_.tick();
           const Vec3 old = p_[v];
-          if (!rescue_vertex(v, reach[v])) continue;
+          if (!rescue_vertex(v, reach[v], widen)) continue;
           if (!in_from[v]) from.push_back({v, old});
           in_from[v] = 1;
           ++n;
@@ -1460,7 +1496,6 @@ class Improver {
       st.rescue_undone += undone;
       if (undone == 0) break;
     }
-    st.rescued = static_cast<std::size_t>(std::count(moved.begin(), moved.end(), 1));
   }
 
   /// Box faces v lies on (per axis).
@@ -1592,8 +1627,9 @@ class Improver {
     return std::max(e, surface_distance(q, o_.voxel));
   }
 
-  /// One vertex's compass search, at most `reach` from where it is; true when it moved.
-  bool rescue_vertex(std::uint32_t v, double reach) {
+  /// One vertex's compass search, at most `reach` from where it is, the deviation bound times
+  /// `widen`; true when it moved.
+  bool rescue_vertex(std::uint32_t v, double reach, double widen) {
     const std::uint32_t nt = inc_off_[v + 1] - inc_off_[v];
     if (nt == 0 || speck_[v]) return false;
     // Box faces the vertex lies on: it stays on them (a border vertex slides along its face).
@@ -1642,7 +1678,7 @@ class Improver {
     };
     std::vector<std::int8_t> orient(nt, 0);
     const double dev0 = ring_deviation(v, start, orient, true);
-    const double tol = std::isfinite(dev0) ? std::max(dev_, dev0) : dev_;
+    const double tol = widen * (std::isfinite(dev0) ? std::max(dev_, dev0) : dev_);
     auto admissible = [&](const Vec3& q) {
       if (!inside_box(q) || distance(q, start) > reach) return false;
       if (o_.max_error > 0 && !ring_error_ok(v, q)) return false;
