@@ -1633,17 +1633,12 @@ class Improver {
     const std::uint32_t nt = inc_off_[v + 1] - inc_off_[v];
     if (nt == 0 || speck_[v]) return false;
     // Box faces the vertex lies on: it stays on them (a border vertex slides along its face).
-    std::array<bool, 3> pinned{};
-    bool on_face = false;
-    if (has_box_)
-      for (int a = 0; a < 3; ++a) {
-        const double eps = 1e-9 * (o_.box.hi[a] - o_.box.lo[a]);
-        pinned[a] = std::abs(p_[v][a] - o_.box.lo[a]) <= eps || std::abs(p_[v][a] - o_.box.hi[a]) <= eps;
-        on_face |= pinned[a];
-      }
+    const std::array<bool, 3> pinned = pinned_axes(v);
+    const bool on_face = pinned[0] || pinned[1] || pinned[2];
     if ((fixed_[v] || boundary_[v]) && !on_face) return false;
     const Vec3 start = p_[v];
-    // The ring's normals at the start: no triangle may turn by more than ~70° from them.
+    // The ring's normals at the start (without a field no triangle may turn by more than ~70°
+    // from them; with one, ring_deviation checks the side each faces).
     std::vector<Vec3> n0(nt);
     Vec3 n{};
     double lsum = 0;
