@@ -1136,6 +1136,17 @@ class Improver {
     return true;
   }
 
+  /// The side (k: edge tri[k] -> tri[k + 1]) of a needle's shortest edge, when it is under half
+  /// the next; -1 otherwise.
+  int needle_side(const Tri& tri) const {
+    std::array<double, 3> len{};
+    for (int k = 0; k < 3; ++k) len[k] = distance(p_[tri[k]], p_[tri[(k + 1) % 3]]);
+    int k = 0;
+    for (int j = 1; j < 3; ++j)
+      if (len[j] < len[k]) k = j;
+    return len[k] < 0.5 * std::min(len[(k + 1) % 3], len[(k + 2) % 3]) ? k : -1;
+  }
+
   std::size_t collapse_pass() {
     build_incidence();
     const double bad = o_.collapse_below_deg * kDeg;
@@ -1152,13 +1163,8 @@ class Improver {
         continue;
       }
       // Shortest edge (a, b) opposite c; a needle has it well under the other two.
-      std::array<double, 3> len{};
-      for (int k = 0; k < 3; ++k) len[k] = distance(p_[tri[k]], p_[tri[(k + 1) % 3]]);
-      int k = 0;
-      for (int j = 1; j < 3; ++j)
-        if (len[j] < len[k]) k = j;
-      const double next = std::min(len[(k + 1) % 3], len[(k + 2) % 3]);
-      if (!(len[k] < 0.5 * next)) continue;
+      const int k = needle_side(tri);
+      if (k < 0) continue;
       collapses += try_collapse(tri[k], tri[(k + 1) % 3], busy, true, 0);
     }
     return collapses;
@@ -1524,12 +1530,8 @@ class Improver {
       if (busy[tri[0]] || busy[tri[1]] || busy[tri[2]]) continue;
       const double old_min = tri_min_angle(tri);
       if (old_min >= floor) continue;
-      std::array<double, 3> len{};
-      for (int k = 0; k < 3; ++k) len[k] = distance(p_[tri[k]], p_[tri[(k + 1) % 3]]);
-      int k = 0;
-      for (int j = 1; j < 3; ++j)
-        if (len[j] < len[k]) k = j;
-      if (!(len[k] < 0.5 * std::min(len[(k + 1) % 3], len[(k + 2) % 3]))) continue;
+      const int k = needle_side(tri);
+      if (k < 0) continue;
       std::uint32_t a = tri[k], b = tri[(k + 1) % 3];
       const std::uint32_t c = tri[(k + 2) % 3];
       if (!boundary_[a] || !boundary_[b] || speck_[a] || speck_[b]) continue;
