@@ -67,9 +67,18 @@ struct ImproveOptions {
   double rescue_below_deg = 0;
 };
 
+/// improve_base_mesh's decimation makes no triangle with a smaller angle than this (degrees)
+/// unless one was there, until it is stuck (then 10°, 5°, 2°).
+inline constexpr double kDecimateShapeFloorDeg = 15;
+
 struct ImproveStats {
   std::size_t flips = 0, moves = 0, collapses = 0, splits = 0;
   std::size_t decimated = 0;  ///< improve_base_mesh: collapses made to reach `decimate_to`
+  /// improve_base_mesh with `decimate_to`: the lowest smallest-angle floor the decimation's
+  /// collapses needed (15°, then 10°, 5°, 2° when stuck), and the triangle count where the 15°
+  /// floor found no collapse (0: it never stuck; below it the shape gives way to the budget).
+  double decimate_floor_deg = 0;
+  std::size_t decimate_stuck_at = 0;
   int rounds = 0;
   double min_angle_before_deg = 0, min_angle_after_deg = 0;
   double pct_below_20_before = 0, pct_below_20_after = 0;

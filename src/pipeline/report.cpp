@@ -18,6 +18,8 @@ nlohmann::json improve_json(const ImproveStats& st) {
           {"collapses", st.collapses},
           {"splits", st.splits},
           {"decimation_collapses", st.decimated},
+          {"decimation_floor_deg", st.decimate_floor_deg},
+          {"decimation_stuck_at", st.decimate_stuck_at},
           {"rounds", st.rounds},
           {"min_angle_before", st.min_angle_before_deg},
           {"min_angle_after", st.min_angle_after_deg},

@@ -53,7 +53,7 @@ constexpr double kErrorSafety = 1.25;
 /// Vertices with a ring triangle under this (degrees) may move as far as their mean edge length.
 constexpr double kWideMoveBelowDeg = 20;
 /// Decimation makes no triangle with a smaller angle than this (degrees) unless one was there.
-constexpr double kDecimateMinAngle = 15;
+constexpr double kDecimateMinAngle = kDecimateShapeFloorDeg;
 /// Untangling moves make no triangle below this (degrees) unless its ring had one.
 constexpr double kUntangleMinAngle = 20;
 /// Specks (Improver::replace_specks): at most this long (voxels) and this many triangles, and
@@ -182,6 +182,11 @@ class Improver {
   /// M0: every move stays under ¾ of the shortest incident edge (anchors stay valid).
   void keep_moves_small() { small_moves_ = true; }
 
+  /// After decimate(): the lowest angle floor its collapses needed (degrees), and the triangle
+  /// count at which the first floor (kDecimateMinAngle) found no collapse (0: it never stuck).
+  double decimate_floor_deg() const { return decimate_floor_deg_; }
+  std::size_t decimate_stuck_at() const { return decimate_stuck_at_; }
+
   ImproveStats run() {
     ImproveStats st;
     measure(st.min_angle_before_deg, st.pct_below_20_before);
@@ -267,6 +272,8 @@ class Improver {
   double flip_below_ = 0;  ///< > 0: only pairs with a triangle below this flip (radians)
   bool has_box_ = false;
   bool small_moves_ = false;  ///< M0: every move under ¾ of the shortest incident edge
+  double decimate_floor_deg_ = 0;
+  std::size_t decimate_stuck_at_ = 0;
   std::vector<Vec3> p_;
   std::vector<Tri> t_;
   std::vector<std::uint8_t> fixed_, boundary_, tri_alive_;
@@ -1180,6 +1187,7 @@ class Improver {
   std::size_t decimate(std::size_t target) {
     static constexpr double kFloors[] = {kDecimateMinAngle, 10, 5, 2};
     std::size_t collapses = 0, floor = 0;
+    decimate_floor_deg_ = kFloors[0];
     for (int pass = 0; pass < 400; ++pass) {
       const std::size_t have = alive_triangles();
       if (have <= target) break;
@@ -1234,7 +1242,9 @@ class Improver {
         }
       }
       collapses += done;
+      if (done == 0 && floor == 0) decimate_stuck_at_ = have;
       if (done == 0 && ++floor == std::size(kFloors)) break;
+      decimate_floor_deg_ = kFloors[floor];
       flip_pass();  // better-shaped neighbourhoods let more edges go in the next pass
     }
     return collapses;
@@ -1779,6 +1789,8 @@ ImproveStats improve_base_mesh(BaseMesh& base, const ScalarField* field, double 
     const std::size_t removed = decimate_to > 0 ? imp.decimate(decimate_to) : 0;
     st = imp.run();
     st.decimated = removed;
+    st.decimate_floor_deg = imp.decimate_floor_deg();
+    st.decimate_stuck_at = imp.decimate_stuck_at();
     imp.write(base.mesh, st.collapses + removed > 0, &map);
     base.mesh.normals.clear();
     return 0;
