@@ -165,6 +165,13 @@ std::string unreachable_budget_note(const BaseMesh& base, const ConnectivityGrap
   return s.str();
 }
 
+/// A triangle budget below M0 decimates M0 to 3/4 of the budget first (the refinement needs room;
+/// further costs accuracy and shape the refinement does not win back: skull 1150.5 at 5k, RMS /
+/// < 20°: to N/4 3.18 / 4.4 %, N/2 2.65 / 3.8 %, 3N/4 2.10 / 2.1 %, 0.9N 2.06 / 2.1 %).
+std::size_t decimation_target(std::size_t budget) { return std::max<std::size_t>(3 * budget / 4, 1); }
+/// The smallest budget whose decimation_target is at least `triangles`.
+std::size_t budget_decimating_to(std::size_t triangles) { return (4 * triangles + 2) / 3; }
+
 /// A budget met by decimating M0 below the shape floor, with more than 1 % of the output under
 /// 20°: says so, and from which budget the decimation keeps its floor (M0 is decimated to 3/4 of
 /// the budget; frog label 13: 5,000 → 12.4 % under 20°, 8,222 → 1.8 %, 20,000 → 0.07 %).
@@ -175,7 +182,7 @@ std::string shape_budget_note(const ExtractReport& rep, std::size_t n, std::size
     << "° shape floor (that floor stopped at " << stuck << " triangles; the collapses went down to "
     << rep.base_improve.decimate_floor_deg << "°): " << rep.improve.pct_below_20_after
     << " % of the output's triangles are under 20°, the smallest " << rep.improve.min_angle_after_deg
-    << "°; --triangles " << (4 * stuck + 2) / 3
+    << "°; --triangles " << budget_decimating_to(stuck)
     << " or more keeps the decimation above that floor, and fewer components or handles leave "
        "more triangles to the rest (--min-component, --max-handle, --min-cavity)";
   return s.str();
@@ -268,11 +275,8 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
     io.voxel = sc.grid.min_spacing();
     io.box = in.field->domain();
     std::size_t decimate_to = 0;
-    // To 3/4 of the budget: decimating further costs accuracy and shape the refinement does not
-    // win back (skull 1150.5 at 5k, RMS / < 20°: to N/4 3.18 / 4.4 %, N/2 2.65 / 3.8 %,
-    // 3N/4 2.10 / 2.1 %, 0.9N 2.06 / 2.1 %).
-    if (o.budget == Budget::triangles && 4 * res.base.mesh.num_triangles() > 3 * o.triangles)
-      decimate_to = std::max<std::size_t>(3 * o.triangles / 4, 1);
+    if (o.budget == Budget::triangles && res.base.mesh.num_triangles() > decimation_target(o.triangles))
+      decimate_to = decimation_target(o.triangles);
     rep.base_improve = improve_base_mesh(res.base, in.field.get(), iso, io, decimate_to, ctx);
     ctx.report("improve M0", 1);
     timings["improve_base"] = clock.lap();

@@ -52,8 +52,6 @@ constexpr double kDeg = std::numbers::pi / 180;
 constexpr double kErrorSafety = 1.25;
 /// Vertices with a ring triangle under this (degrees) may move as far as their mean edge length.
 constexpr double kWideMoveBelowDeg = 20;
-/// Decimation makes no triangle with a smaller angle than this (degrees) unless one was there.
-constexpr double kDecimateMinAngle = kDecimateShapeFloorDeg;
 /// Untangling moves make no triangle below this (degrees) unless its ring had one.
 constexpr double kUntangleMinAngle = 20;
 /// Specks (Improver::replace_specks): at most this long (voxels) and this many triangles, and
@@ -183,7 +181,7 @@ class Improver {
   void keep_moves_small() { small_moves_ = true; }
 
   /// After decimate(): the lowest angle floor its collapses needed (degrees), and the triangle
-  /// count at which the first floor (kDecimateMinAngle) found no collapse (0: it never stuck).
+  /// count at which the first floor (kDecimateShapeFloorDeg) found no collapse (0: it never stuck).
   double decimate_floor_deg() const { return decimate_floor_deg_; }
   std::size_t decimate_stuck_at() const { return decimate_stuck_at_; }
 
@@ -1185,9 +1183,8 @@ class Improver {
   /// the decimation removes again (ct_lidc2_chest at 100.5, one component, 5,000 triangles:
   /// stuck at 8,494 with the 15° floor alone).
   std::size_t decimate(std::size_t target) {
-    static constexpr double kFloors[] = {kDecimateMinAngle, 10, 5, 2};
+    static constexpr double kFloors[] = {kDecimateShapeFloorDeg, 10, 5, 2};
     std::size_t collapses = 0, floor = 0;
-    decimate_floor_deg_ = kFloors[0];
     for (int pass = 0; pass < 400; ++pass) {
       const std::size_t have = alive_triangles();
       if (have <= target) break;
@@ -1244,9 +1241,9 @@ class Improver {
       collapses += done;
       if (done == 0 && floor == 0) decimate_stuck_at_ = have;
       if (done == 0 && ++floor == std::size(kFloors)) break;
-      decimate_floor_deg_ = kFloors[floor];
       flip_pass();  // better-shaped neighbourhoods let more edges go in the next pass
     }
+    decimate_floor_deg_ = kFloors[std::min(floor, std::size(kFloors) - 1)];
     return collapses;
   }
 
