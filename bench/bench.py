@@ -154,6 +154,12 @@ def shared_datasets():
         for iso in ds["iso_values"]:
             out.append(Input(f"{ds['id']}@{iso['value']}", os.path.join(SHARED_DATA, ds["primary_file"]),
                              iso["value"], kind="dataset", dataset=ds["id"]))
+        if ds["id"] == "frog_tissue_labels":
+            # The union of the tissues as one 0/1 mask (docs/QUALITY.md "Label maps"): the
+            # surface the manifest's iso 0.5 of the raw label numbers stands for.
+            out.append(Input("frog_tissue_labels@labels1-29",
+                             os.path.join(SHARED_DATA, ds["primary_file"]), 0.5,
+                             ["--label", "1-29"], kind="dataset", dataset=ds["id"]))
     return out
 
 

@@ -73,6 +73,8 @@ inline Options parse(int argc, char** argv) {
       const auto b = split_numbers(next());
       if (b.size() != 6) usage(argv[0], "--bounds needs 6 numbers");
       o.input_options.bounds = adamesh::Box{{b[0], b[1], b[2]}, {b[3], b[4], b[5]}};
+    } else if (a == "--label") {  // label maps: the 0/1 mask of a set of labels
+      o.input_options.label = adamesh::parse_label_set(next());
     } else if (a == "--out") {
       o.out_dir = next();
     } else if (a == "--budgets") {

@@ -704,3 +704,53 @@ TEST(Stats, IndependentOfThreadCount) {
   EXPECT_EQ(one.percentiles, many.percentiles);
   EXPECT_EQ(one.otsu, many.otsu);
 }
+
+namespace adamesh {
+namespace {
+
+// Label sets (--label, Python's label=): values and inclusive ranges, merged; anything else is
+// a usage error naming the text.
+TEST(LabelSet, ParsesValuesAndRangesAndMergesThem) {
+  EXPECT_EQ(parse_label_set("5").to_string(), "5");
+  EXPECT_EQ(parse_label_set("1-15").to_string(), "1-15");
+  EXPECT_EQ(parse_label_set("9,1,3-5,4-7").to_string(), "1,3-7,9");
+  EXPECT_EQ(parse_label_set("3,4,5").to_string(), "3-5");
+  EXPECT_EQ(parse_label_set("-3--1,0").to_string(), "-3-0");
+  const LabelSet s = parse_label_set("1,3,5-9");
+  for (std::int64_t v : {1, 3, 5, 7, 9}) EXPECT_TRUE(s.contains(v)) << v;
+  for (std::int64_t v : {0, 2, 4, 10}) EXPECT_FALSE(s.contains(v)) << v;
+  for (const char* bad : {"", ",", "1,", ",1", "a", "1-", "5-3", "1-2-3", "1 ", "1;2",
+                          "99999999999999999999"}) {
+    try {
+      parse_label_set(bad);
+      ADD_FAILURE() << "accepted '" << bad << "'";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.status(), Status::usage) << bad;
+      EXPECT_NE(std::string(e.what()).find(std::string("'") + bad + "'"), std::string::npos) << e.what();
+    }
+  }
+}
+
+// The note for an iso-value on a label map: only with several labels on one side.
+TEST(LabelSet, IsoValueNoteOnlyForSeveralLabelsOnOneSide) {
+  auto volume = [](std::vector<std::uint8_t> values) {
+    Grid g;
+    g.dims = {static_cast<std::int64_t>(values.size()), 1, 1};
+    Volume v = allocate_volume(g, ScalarType::u8, "v.raw");
+    std::copy(values.begin(), values.end(), v.samples<std::uint8_t>());
+    return v;
+  };
+  EXPECT_EQ(label_map_iso_note(volume({0, 1, 0, 1}), 0.5, +1), "");  // a mask
+  // Two labels below, one above: the surface still depends on which one meets label 2.
+  const std::string one = label_map_iso_note(volume({0, 1, 2, 0}), 1.5, +1);
+  EXPECT_NE(one.find("`--label 2` meshes that label's boundary as a 0/1 mask"), std::string::npos) << one;
+  EXPECT_EQ(label_map_iso_note(volume({0, 3, 3, 0}), 1.5, +1), "");       // one value each side
+  EXPECT_NE(label_map_iso_note(volume({0, 1, 2, 0}), 0.5, +1), "");  // 1 and 2 above
+  const std::string n = label_map_iso_note(volume({0, 4, 2, 9, 0}), 3.0, -1);  // inside: below 3
+  EXPECT_NE(n.find("v.raw: looks like a label map (4 integer values, 2 of them below the iso-value 3)"),
+            std::string::npos) << n;
+  EXPECT_NE(n.find("`--label 0-2`"), std::string::npos) << n;
+}
+
+}  // namespace
+}  // namespace adamesh

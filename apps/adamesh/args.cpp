@@ -145,8 +145,9 @@ std::vector<OptionSpec> input_option_specs() {
       {"--nan-value", true, "replace NaN/Inf samples by this value (default: reject them)"},
       {"--flip", false, "swap inside and outside"},
       {"--label", true,
-       "label maps: the boundary of the voxels with this value (iso 0.5 of their 0/1 mask; "
-       "`adamesh info` lists the labels)"},
+       "label maps: the boundary of the voxels with this value, or with any value of a set "
+       "(1,3,5-9: their union as one surface; iso 0.5 of their 0/1 mask; `adamesh info` lists "
+       "the labels)"},
       {"--series", true, "DICOM directory with several series: the SeriesInstanceUID to read"},
   };
 }
@@ -189,7 +190,13 @@ InputOptions input_options_from(const Args& args) {
   }
   o.nan_value = args.get_double("--nan-value");
   o.flip_inside = args.has("--flip");
-  o.label = args.get_int("--label");
+  if (auto l = args.get("--label")) {
+    try {
+      o.label = parse_label_set(*l);
+    } catch (const Error& e) {
+      fail(Status::usage, std::string("--label: ") + e.what());
+    }
+  }
   o.raw.dicom_series = args.get_or("--series", "");
   return o;
 }

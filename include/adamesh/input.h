@@ -6,6 +6,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "adamesh/field.h"
@@ -25,6 +26,22 @@ struct RawOptions {
   std::string dicom_series;
 };
 
+/// A set of label values: inclusive ranges, sorted and disjoint (parse_label_set() builds it).
+struct LabelSet {
+  std::vector<std::pair<std::int64_t, std::int64_t>> ranges;
+
+  static LabelSet single(std::int64_t value) { return {{{value, value}}}; }
+  bool contains(std::int64_t value) const;
+  /// "5", "1-15", "1,3,5-9": the form parse_label_set() reads.
+  std::string to_string() const;
+};
+
+/// Parses a label set: values and inclusive ranges separated by commas ("5", "1-15",
+/// "1,3,5-9"; values may be negative: "-2--1"). Overlapping parts merge. Throws
+/// Error(usage) naming the text for anything else (empty parts, a range whose end is below its
+/// start, a value beyond 64 bits).
+LabelSet parse_label_set(const std::string& text);
+
 struct InputOptions {
   RawOptions raw;
   std::optional<Box> bounds;         ///< sampling box of implicit inputs (default per shape)
@@ -32,8 +49,9 @@ struct InputOptions {
   std::optional<double> nan_value;   ///< replace NaN/Inf samples by this value instead of failing
   bool flip_inside = false;          ///< swap inside and outside
   bool keep_nonfinite = false;       ///< `info`: count NaN/Inf samples instead of failing
-  /// Label maps: the input becomes the 0/1 mask of the voxels with this value (label_input()).
-  std::optional<std::int64_t> label;
+  /// Label maps: the input becomes the 0/1 mask of the voxels whose value is in this set
+  /// (label_input()).
+  std::optional<LabelSet> label;
 };
 
 struct Input {
@@ -66,10 +84,21 @@ struct LabelCount {
 /// (intensities). One pass over the samples.
 std::vector<LabelCount> label_counts(const Volume& volume, std::size_t max_labels = 64);
 
-/// The boundary of one label as an input: a 0/1 uint8 mask of the voxels equal to `label` on the
-/// same grid, inside where 1, default iso-value 1/2. Throws Error(invalid_input) for a floating
-/// volume or a label no voxel has.
-Input label_input(const Input& in, std::int64_t label);
+/// The boundary of a set of labels as an input: a 0/1 uint8 mask of the voxels whose value is in
+/// `labels` on the same grid, inside where 1, default iso-value 1/2 (one set of several labels:
+/// their union as one surface). Throws Error(invalid_input) for a floating volume or a set no
+/// voxel is in.
+Input label_input(const Input& in, const LabelSet& labels);
+inline Input label_input(const Input& in, std::int64_t label) {
+  return label_input(in, LabelSet::single(label));
+}
+
+/// For an iso-surface of a volume that looks like a label map (label_counts() finds its
+/// values) with more than one value on the inside or more than one on the outside of `iso`
+/// (`inside_sign` as in Input): one line saying that the surface follows the interpolated
+/// label numbers and which --label set meshes the inside values as one 0/1 mask. Empty
+/// otherwise (intensities, binary masks, one value on each side).
+std::string label_map_iso_note(const Volume& volume, double iso, double inside_sign);
 
 /// What fill_cavities() did.
 struct CavityReport {

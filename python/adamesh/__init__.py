@@ -216,7 +216,8 @@ def _input_options(res: Optional[int] = None, bounds: Optional[Sequence[float]] 
                    dims: Optional[Sequence[int]] = None, type: Optional[str] = None,
                    spacing: Optional[Sequence[float]] = None,
                    origin: Optional[Sequence[float]] = None, big_endian: bool = False,
-                   header_bytes: int = 0, label: Optional[int] = None) -> Any:
+                   header_bytes: int = 0,
+                   label: Union[int, str, Sequence[int], None] = None) -> Any:
     o = _adamesh.InputOptions()
     if res is not None:
         if not 2 <= int(res) <= 4096:
@@ -236,7 +237,12 @@ def _input_options(res: Optional[int] = None, bounds: Optional[Sequence[float]] 
     if origin is not None:
         o.origin = tuple(float(s) for s in origin)
     if label is not None:
-        o.label = int(label)
+        if isinstance(label, str):
+            o.label = label
+        elif isinstance(label, (int, np.integer)):
+            o.label = str(int(label))
+        else:
+            o.label = ",".join(str(int(x)) for x in label)
     o.big_endian = bool(big_endian)
     o.header_bytes = int(header_bytes)
     return o
@@ -245,7 +251,8 @@ def _input_options(res: Optional[int] = None, bounds: Optional[Sequence[float]] 
 def load(path: PathLike, **input_options: Any) -> Volume:
     """Reads a volume file (NRRD, MetaImage, NIfTI, VTK, VTI, SLC, MRC, raw) or samples
     ``shape:NAME`` / ``expr:'EXPR'``. Keywords: ``res``, ``bounds`` (implicit inputs),
-    ``nan_value``, ``flip``, ``label`` (label maps: that label's 0/1 mask, iso 0.5); raw files: ``dims`` (x, y, z), ``type``, ``spacing``, ``origin``,
+    ``nan_value``, ``flip``, ``label`` (label maps: the 0/1 mask of one label, or of a set —
+    ``"1-15"``, ``"1,3,5-9"`` or a list of values — whose union is one surface; iso 0.5); raw files: ``dims`` (x, y, z), ``type``, ``spacing``, ``origin``,
     ``big_endian``, ``header_bytes``. The result's ``order`` is ``"zyx"``."""
     return Volume._wrap(_adamesh._load(os.fspath(path), _input_options(**input_options)))
 

@@ -439,7 +439,16 @@ PYBIND11_MODULE(_adamesh, m) {
       .def_readwrite("resolution", &InputOptions::resolution)
       .def_readwrite("nan_value", &InputOptions::nan_value)
       .def_readwrite("flip_inside", &InputOptions::flip_inside)
-      .def_readwrite("label", &InputOptions::label);
+      .def_property(
+          "label",
+          [](const InputOptions& o) -> std::optional<std::string> {
+            if (!o.label) return std::nullopt;
+            return o.label->to_string();
+          },
+          [](InputOptions& o, std::optional<std::string> s) {
+            if (s) o.label = parse_label_set(*s);
+            else o.label.reset();
+          });
 
   py::enum_<Budget>(m, "Budget")
       .value("none", Budget::none)

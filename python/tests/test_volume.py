@@ -176,3 +176,25 @@ def test_direction_and_origin_place_the_mesh():
                             base_only=True)
     np.testing.assert_allclose(moved.vertices.min(axis=0), plain.vertices.min(axis=0) + (10, 20, 30),
                                atol=1.0)
+
+
+def test_label_sets_and_the_label_map_note(tmp_path):
+    # Labels 3 and 7 side by side (one box together), label 9 apart.
+    a = np.zeros((24, 24, 24), dtype=np.uint8)  # [z, y, x]
+    a[4:14, 4:14, 4:12] = 3
+    a[4:14, 4:14, 12:18] = 7
+    a[17:21, 17:21, 17:21] = 9
+    raw = tmp_path / "l.raw"
+    a.tofile(raw)
+    opts = dict(dims=(24, 24, 24), type="uint8")
+    for label in ("3,7", "3-7", [3, 7], (7, 3)):
+        r = adamesh.extract(raw, label=label, **opts)
+        assert r.report["base"]["components"] == 1, label
+    assert adamesh.extract(raw, label=9, **opts).report["base"]["components"] == 1
+    assert adamesh.extract(raw, label="3-9", **opts).report["base"]["components"] == 2
+    # The raw label numbers at 0.5: the report's warnings say which set to mesh instead.
+    r = adamesh.extract(raw, 0.5, **opts)
+    notes = r.report["warnings"]
+    assert any("looks like a label map" in w and "`--label 3-9`" in w for w in notes), notes
+    with pytest.raises(adamesh.UsageError, match="label set '7-3'"):
+        adamesh.extract(raw, label="7-3", **opts)

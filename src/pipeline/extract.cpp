@@ -198,6 +198,9 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
 
   // 1. check; topology control in the volume (handles cut, cavities filled, on a copy)
   const double iso = checked_iso(input, o);
+  // A label map meshed at an iso-value: the note says which --label set gives one clean surface.
+  const std::string label_note =
+      input.volume ? label_map_iso_note(*input.volume, iso, input.inside_sign) : std::string();
   timings["read"] = read_s + clock.lap();
   // Handles first: plugging a tube at both ends makes a cavity.
   Input controlled;
@@ -262,6 +265,7 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
   release_freed_memory();  // the covering's freed small blocks
   restore_node_geometry(*in.volume, sc, ctx);
   res.base = build_base_mesh(sc, g, std::move(cov), in.field.get(), opt, std::move(stats), ctx);
+  if (!label_note.empty()) res.base.stats.warnings.insert(res.base.stats.warnings.begin(), label_note);
   ctx.report("dual", 1);
   timings["dual"] = clock.lap();
   rss["dual"] = peak_rss_mb();
