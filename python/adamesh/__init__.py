@@ -22,6 +22,7 @@ import json
 import math
 import os
 import sys
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, Callable, Optional, Sequence, Union
 
@@ -41,12 +42,18 @@ from ._adamesh import (  # noqa: F401  (re-exported)
 __all__ = [
     "Volume", "Mesh", "Hierarchy", "Result", "load", "extract", "mc", "stats", "read_mesh",
     "load_hierarchy", "shape_names", "Error", "UsageError", "InputError", "UnsupportedError",
-    "OutputError", "InternalError", "CancelledError",
+    "OutputError", "InternalError", "CancelledError", "AdameshWarning",
 ]
 
 __version__ = "0.1.0"
 
 PathLike = Union[str, "os.PathLike[str]"]
+
+
+class AdameshWarning(UserWarning):
+    """What ``adamesh extract`` prints as ``adamesh: warning: ...`` (a budget out of reach, a
+    budget met below the decimation's shape floor, an iso-value on a label map): issued by
+    :func:`extract` once per line, also in ``result.report["warnings"]``."""
 
 # numpy sample types the library reads as they are (native byte order); everything else is
 # converted: bool -> uint8, float16 -> float32, 64-bit integers -> float64 (exact up to 2**53).
@@ -481,9 +488,12 @@ def extract(source: Union[Volume, PathLike], iso: Optional[float] = None, *,
         src, o, _input_options(**input_options), _progress_callback(progress))
     base_mesh = Mesh(_mesh=base["mesh"])
     out_mesh = Mesh(_mesh=mesh) if hierarchy is not None else base_mesh
+    rep = json.loads(report)
+    for w in rep.get("warnings", []):
+        warnings.warn(w, AdameshWarning, stacklevel=2)
     return Result(mesh=out_mesh, base=Base(base_mesh, base["border"], base["component"]),
                   hierarchy=None if hierarchy is None else Hierarchy(hierarchy),
-                  report=json.loads(report))
+                  report=rep)
 
 
 def _count(value: Any, what: str, minimum: int) -> int:

@@ -193,7 +193,8 @@ def test_label_sets_and_the_label_map_note(tmp_path):
     assert adamesh.extract(raw, label=9, **opts).report["base"]["components"] == 1
     assert adamesh.extract(raw, label="3-9", **opts).report["base"]["components"] == 2
     # The raw label numbers at 0.5: the report's warnings say which set to mesh instead.
-    r = adamesh.extract(raw, 0.5, **opts)
+    with pytest.warns(adamesh.AdameshWarning, match="looks like a label map"):
+        r = adamesh.extract(raw, 0.5, **opts)
     notes = r.report["warnings"]
     assert any("looks like a label map" in w and "`--label 3-9`" in w for w in notes), notes
     with pytest.raises(adamesh.UsageError, match="label set '7-3'"):
