@@ -319,6 +319,10 @@ TEST(Labels, ASetIsOneSurfaceAndAnIsoValueSaysWhichSet) {
     if (err) *err = r.err;
     return mesh_topo(read_mesh(tmp.file("a.ply")));
   };
+  const auto info = run_cli("info " + in);
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_NE(info.out.find("all but 0 as one surface with `extract --label 3-9`"), std::string::npos)
+      << info.out;
   EXPECT_EQ(topo("--label 3,7").components, 1);  // one box, no wall between the labels
   EXPECT_EQ(topo("--label 3-7").components, 1);  // 3 to 7: the same voxels
   EXPECT_EQ(topo("--label 7,3").chi, 2);

@@ -3,6 +3,7 @@
 // docs/CONVENTIONS.md; statistics: include/adamesh/stats.h.
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <iostream>
@@ -123,9 +124,23 @@ void print_text(const Input& in, const InputOptions& o, const VolumeStats& s,
   if (s.finite > 0 && labels.empty()) {
     line("suggested iso", fmt(s.otsu) + " (Otsu)");
   } else if (s.finite > 0) {
+    // With a background 0: every other label as one set (absent values in between change
+    // nothing), the surface of all tissues together.
+    std::string union_hint;
+    if (std::any_of(labels.begin(), labels.end(), [](const LabelCount& c) { return c.label == 0; })) {
+      LabelSet all;
+      std::int64_t below = 0, above = 0;  // the largest negative and smallest positive label
+      for (const LabelCount& c : labels) {
+        if (c.label < 0) below = c.label;
+        if (c.label > 0 && above == 0) above = c.label;
+      }
+      if (below < 0) all.ranges.push_back({labels.front().label, below});
+      if (above > 0) all.ranges.push_back({above, labels.back().label});
+      union_hint = ", all but 0 as one surface with `extract --label " + all.to_string() + "`";
+    }
     line("label map", std::to_string(labels.size()) +
-                          " labels (integer values); mesh one with `extract --label L`, all with "
-                          "`extract --labels all -o DIR/`");
+                          " labels (integer values); mesh one with `extract --label L`, each with "
+                          "`extract --labels all -o DIR/`" + union_hint);
     for (const auto& c : labels) {
       std::ostringstream t;
       t << std::setw(8) << c.label << "  " << std::setw(12) << c.voxels << " voxels  ("

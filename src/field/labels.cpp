@@ -2,11 +2,11 @@
 // 0/1 mask of a set of labels, whose iso-surface at 1/2 is that set's boundary.
 #include <algorithm>
 #include <charconv>
-#include <cmath>
+#include <cstdint>
 #include <limits>
-#include <type_traits>
 #include <map>
 #include <sstream>
+#include <type_traits>
 
 #include "adamesh/error.h"
 #include "adamesh/field.h"
