@@ -127,7 +127,8 @@ void print_text(const Input& in, const InputOptions& o, const VolumeStats& s,
     // With a background 0: every other label as one set (absent values in between change
     // nothing), the surface of all tissues together.
     std::string union_hint;
-    if (std::any_of(labels.begin(), labels.end(), [](const LabelCount& c) { return c.label == 0; })) {
+    const auto is_background = [](const LabelCount& c) { return c.label == 0; };
+    if (std::any_of(labels.begin(), labels.end(), is_background)) {
       LabelSet all;
       std::int64_t below = 0, above = 0;  // the largest negative and smallest positive label
       for (const LabelCount& c : labels) {

@@ -73,7 +73,8 @@ std::string LabelSet::to_string() const {
 LabelSet parse_label_set(const std::string& text) {
   auto bad = [&](const std::string& why) {
     return Error(Status::usage, "label set '" + text + "': " + why +
-                                    " (expected values and ranges separated by commas: 5, 1-15, 1,3,5-9)");
+                                    " (expected values and ranges separated by commas: 5, 1-15, "
+                                    "1,3,5-9)");
   };
   // One value at p (an optional minus sign, then digits); advances p.
   auto value = [&](const char*& p, const char* end) {
@@ -97,7 +98,9 @@ LabelSet parse_label_set(const std::string& text) {
       if (*p != '-') throw bad("unexpected '" + std::string(1, *p) + "'");
       hi = value(++p, end);
       if (p != end) throw bad("unexpected '" + std::string(1, *p) + "'");
-      if (hi < lo) throw bad("the range " + std::to_string(lo) + "-" + std::to_string(hi) + " ends below its start");
+      if (hi < lo)
+        throw bad("the range " + std::to_string(lo) + "-" + std::to_string(hi) +
+                  " ends below its start");
     }
     set.ranges.push_back({lo, hi});
     if (comma == text.size()) break;
@@ -106,8 +109,10 @@ LabelSet parse_label_set(const std::string& text) {
   std::sort(set.ranges.begin(), set.ranges.end());
   std::vector<std::pair<std::int64_t, std::int64_t>> merged;
   for (const auto& r : set.ranges) {
-    if (!merged.empty() && (r.first <= merged.back().second ||
-                            (merged.back().second < INT64_MAX && r.first == merged.back().second + 1)))
+    const bool joins = !merged.empty() &&
+                       (r.first <= merged.back().second ||
+                        (merged.back().second < INT64_MAX && r.first == merged.back().second + 1));
+    if (joins)
       merged.back().second = std::max(merged.back().second, r.second);
     else
       merged.push_back(r);

@@ -265,7 +265,8 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
   release_freed_memory();  // the covering's freed small blocks
   restore_node_geometry(*in.volume, sc, ctx);
   res.base = build_base_mesh(sc, g, std::move(cov), in.field.get(), opt, std::move(stats), ctx);
-  if (!label_note.empty()) res.base.stats.warnings.insert(res.base.stats.warnings.begin(), label_note);
+  if (!label_note.empty())
+    res.base.stats.warnings.insert(res.base.stats.warnings.begin(), label_note);
   ctx.report("dual", 1);
   timings["dual"] = clock.lap();
   rss["dual"] = peak_rss_mb();

@@ -1562,7 +1562,8 @@ class Improver {
       Vec3 q;
       collapse_ok(ba, bb, true, 0, q, rings_);  // the chosen one's point and rings again
       Undo u{ba, p_[ba], {}};
-      for (std::uint32_t i = inc_off_[bb]; i < inc_off_[bb + 1]; ++i) u.tris.push_back({inc_[i], t_[inc_[i]]});
+      for (std::uint32_t i = inc_off_[bb]; i < inc_off_[bb + 1]; ++i)
+        u.tris.push_back({inc_[i], t_[inc_[i]]});
       commit_collapse(ba, bb, q, rings_, busy);
       done.push_back(std::move(u));
     }
