@@ -1301,20 +1301,11 @@ class Improver {
     }
     if (done.empty()) return;
     // New triangles that cross others: that speck keeps its old triangles.
-    std::vector<std::uint32_t> id;
-    Mesh m = snapshot(id);
-    std::vector<std::uint8_t> involved(m.num_triangles(), 0);
     std::vector<std::int32_t> owner(t_.size(), -1);
     for (std::size_t s = 0; s < done.size(); ++s)
       for (std::uint32_t t = done[s].first_tri; t < done[s].first_tri + done[s].n_tris; ++t)
         owner[t] = static_cast<std::int32_t>(s);
-    for (std::size_t k = 0; k < id.size(); ++k) involved[k] = owner[id[k]] >= 0;
-    const auto pairs = intersecting_pairs_involving(m, involved, ctx_);
-    std::vector<std::uint8_t> undo(done.size(), pairs ? 0 : 1);
-    if (pairs)
-      for (const auto& [a, b] : *pairs)
-        for (auto t : {a, b})
-          if (owner[id[t]] >= 0) undo[owner[id[t]]] = 1;
+    const std::vector<std::uint8_t> undo = changes_that_cross(owner, done.size());
     for (std::size_t s = 0; s < done.size(); ++s) {
       if (!undo[s]) {
         ++st.specks;
@@ -1519,6 +1510,24 @@ class Improver {
     }
   }
 
+  /// Which of `n` local changes left a triangle crossing another one: owner[t] is the change
+  /// that made alive triangle t (or −1); a change is flagged when one of its triangles is in an
+  /// intersecting pair, and every change when the count was not measured (its test budget).
+  std::vector<std::uint8_t> changes_that_cross(const std::vector<std::int32_t>& owner,
+                                               std::size_t n) const {
+    std::vector<std::uint32_t> id;
+    const Mesh m = snapshot(id);
+    std::vector<std::uint8_t> involved(m.num_triangles(), 0);
+    for (std::size_t k = 0; k < id.size(); ++k) involved[k] = owner[id[k]] >= 0;
+    const auto pairs = intersecting_pairs_involving(m, involved, ctx_);
+    std::vector<std::uint8_t> crossing(n, pairs ? 0 : 1);
+    if (pairs)
+      for (const auto& [x, y] : *pairs)
+        for (auto k : {x, y})
+          if (owner[id[k]] >= 0) crossing[owner[id[k]]] = 1;
+    return crossing;
+  }
+
   /// Last resort for the triangles still under `floor` after the rescue: the collapse of
   /// whichever of their three edges leaves the best smallest angle around the merged vertex
   /// (collapse_ok's tests: link condition, no valence-3 common neighbour, no triangle turned,
@@ -1569,20 +1578,11 @@ class Improver {
     }
     if (done.empty()) return 0;
     build_incidence();
-    std::vector<std::uint32_t> id;
-    Mesh m = snapshot(id);
     std::vector<std::int32_t> owner(t_.size(), -1);
     for (std::size_t c = 0; c < done.size(); ++c)
       for (std::uint32_t i = inc_off_[done[c].a]; i < inc_off_[done[c].a + 1]; ++i)
         owner[inc_[i]] = static_cast<std::int32_t>(c);
-    std::vector<std::uint8_t> involved(m.num_triangles(), 0);
-    for (std::size_t k = 0; k < id.size(); ++k) involved[k] = owner[id[k]] >= 0;
-    const auto pairs = intersecting_pairs_involving(m, involved, ctx_);
-    std::vector<std::uint8_t> undo(done.size(), pairs ? 0 : 1);
-    if (pairs)
-      for (const auto& [x, y] : *pairs)
-        for (auto k : {x, y})
-          if (owner[id[k]] >= 0) undo[owner[id[k]]] = 1;
+    const std::vector<std::uint8_t> undo = changes_that_cross(owner, done.size());
     std::size_t kept = 0;
     for (std::size_t c = 0; c < done.size(); ++c) {
       if (!undo[c]) {
