@@ -108,6 +108,10 @@ Vec3 along(const std::vector<Vec3>& pts, double fraction, std::size_t& seg) {
 /// The volume face nearest p (index space): snaps p onto it and returns its unit world normal.
 Vec3 snap_to_face(const Grid& grid, Vec3& p) {
   Vec3 q = grid.to_index(p);
+  // Inside the face too, not only in its plane: a projection in the plane can run past the
+  // face's edge where the surface leaves the box along it (sampled fields clamp outside the
+  // box; carotid at 100.5: a vertex 0.08 voxel beyond y max on the x min face).
+  for (int a = 0; a < 3; ++a) q[a] = std::clamp(q[a], 0.0, static_cast<double>(grid.dims[a] - 1));
   int best_axis = 0;
   bool high = false;
   double best = 1e300;
