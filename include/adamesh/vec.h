@@ -109,4 +109,19 @@ struct Box {
   inline double diagonal() const { return norm(hi - lo); }
 };
 
+/// The box widened to hold its faces both as computed (double) and as a mesh's float vertex
+/// coordinates store them: a bound that is not a float (spacing 0.8: y max 71.2) is stored as the
+/// nearest float (71.19999695), a face vertex computed on it can end anywhere between the two.
+/// Tests of vertices against the exact box find stored face vertices outside it (or off their
+/// face); against the float box, computed ones.
+inline Box widened_to_floats(const Box& b) {
+  Box r;
+  for (int k = 0; k < 3; ++k) {
+    const double flo = static_cast<float>(b.lo[k]), fhi = static_cast<float>(b.hi[k]);
+    r.lo[k] = flo < b.lo[k] ? flo : b.lo[k];
+    r.hi[k] = fhi > b.hi[k] ? fhi : b.hi[k];
+  }
+  return r;
+}
+
 }  // namespace adamesh
