@@ -115,6 +115,7 @@ int cmd_level(const Argv& argv) {
     FitOptions fo;
     fo.max_step = 0.25 * h.voxel;
     fo.box = b;
+    if (in.volume) fo.faces = oblique_faces(in.volume->grid);
     const FitStats st = fit_least_squares(cut.mesh, cut.vertex_border, *in.field, h.iso, fo);
     std::ostringstream w;
     w << ", fitted: RMS distance " << st.rms_before << " -> " << st.rms_after;

@@ -25,6 +25,19 @@
 
 namespace adamesh {
 
+struct Grid;
+
+/// The faces of an oblique volume's grid (direction not the identity), which its world bounding
+/// box does not describe: index = to_index (p − origin) lies in [0, extent] inside the grid and
+/// at 0 or extent[a] on a face. Empty (extent 0) for axis-aligned volumes, whose box is exact.
+struct GridFaces {
+  Mat3 to_index{};
+  Vec3 origin{}, extent{};
+  bool empty() const { return !(extent.x > 0); }
+};
+/// The faces of `grid` when it is oblique, else empty.
+GridFaces oblique_faces(const Grid& grid);
+
 struct ImproveOptions {
   /// Outer rounds of flips → moves → collapses (each stops early when nothing changes).
   int rounds = 8;
@@ -51,6 +64,9 @@ struct ImproveOptions {
   double max_error = 0;
   /// The box vertices must stay in (the volume's world box); empty (lo == hi) = no box.
   Box box;
+  /// Oblique volumes: the grid's faces, which take the box's place (vertices inside the grid,
+  /// border vertices on its faces).
+  GridFaces faces;
   /// After the rounds, move the vertices of self-intersecting triangles to the mean of their
   /// neighbours while that lowers the number of intersecting pairs (docs/QUALITY.md).
   bool untangle = false;
@@ -132,6 +148,7 @@ struct FitOptions {
   double damping = 0.7;   ///< fraction of each vertex's own least-squares step taken per pass
   double max_step = 1;    ///< cap on each step (world units); callers pass a fraction of a voxel
   Box box;                ///< vertices are clamped into it (empty: none)
+  GridFaces faces;        ///< oblique volumes: vertices are clamped into the grid instead
 };
 
 struct FitStats {

@@ -279,6 +279,7 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
     ImproveOptions io;
     io.voxel = sc.grid.min_spacing();
     io.box = in.field->domain();
+    io.faces = oblique_faces(sc.grid);
     std::size_t decimate_to = 0;
     if (o.budget == Budget::triangles && res.base.mesh.num_triangles() > decimation_target(o.triangles))
       decimate_to = decimation_target(o.triangles);
@@ -308,6 +309,7 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
       ImproveOptions io;
       io.voxel = sc.grid.min_spacing();
       io.box = in.field->domain();
+      io.faces = oblique_faces(sc.grid);
       io.target_triangles = cut.mesh.num_triangles();
       io.untangle = true;
       io.rescue_below_deg = 20;
@@ -335,6 +337,7 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
       FitOptions fo;
       fo.max_step = 0.25 * sc.grid.min_spacing();
       fo.box = in.field->domain();
+      fo.faces = oblique_faces(sc.grid);
       rep.fit = fit_least_squares(cut.mesh, cut.vertex_border, *in.field, iso, fo, ctx);
       ctx.report("fit", 1);
       timings["fit"] = clock.lap();

@@ -401,6 +401,22 @@ Surface::Surface(const SurfelComplex& sc_, const ConnectivityGraph& g_, const Sc
                          : std::numeric_limits<double>::infinity()),
       border_graph(build_border_graph(sc_, g_)) {}
 
+/// p clamped into the volume: its world box, and for an oblique grid (whose box holds more than
+/// the grid) into the grid in index space.
+Vec3 into_volume(const Surface& s, const Vec3& p) {
+  const Box box = s.field.domain();
+  const Vec3 q = vmin(vmax(p, box.lo), box.hi);
+  const Grid& grid = s.sc.grid;
+  if (grid.axis_aligned()) return q;
+  Vec3 u = grid.to_index(q);
+  bool out = false;
+  for (int a = 0; a < 3; ++a) {
+    const double top = static_cast<double>(grid.dims[a] - 1);
+    if (u[a] < 0 || u[a] > top) u[a] = std::clamp(u[a], 0.0, top), out = true;
+  }
+  return out ? grid.to_world(u) : q;
+}
+
 Placed place_vertex(const Surface& s, const EdgeInput& in, PathWorkspace& ws) {
   if (in.border) return place_border(s, in, ws);
   const SurfelComplex& sc = s.sc;
@@ -446,7 +462,7 @@ Placed place_vertex(const Surface& s, const EdgeInput& in, PathWorkspace& ws) {
     }
     lp = place_on_normal_line(s, in, check, ref_tol);
     if (lp.ok && lp.quality >= 0) {
-      out.position = vmin(vmax(lp.position, s.field.domain().lo), s.field.domain().hi);
+      out.position = into_volume(s, lp.position);
       out.kind = PlacementKind::normal_line;
       out.anchor = greedy_walk(s.g, sc, mid_anchor, out.position);
       return out;
@@ -489,8 +505,7 @@ Placed place_vertex(const Surface& s, const EdgeInput& in, PathWorkspace& ws) {
   }
   // Every vertex inside the volume's box (sampled fields clamp outside it, so a Newton step can
   // leave it).
-  const Box box = s.field.domain();
-  out.position = vmin(vmax(out.position, box.lo), box.hi);
+  out.position = into_volume(s, out.position);
   out.anchor = greedy_walk(s.g, sc, mid_anchor, out.position);
   return out;
 }

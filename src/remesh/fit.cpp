@@ -288,6 +288,7 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
   std::vector<Vec3> next(nv);
   std::vector<std::uint8_t> touched(nt);
   st.rms_before = measure_and_sum(true);
+  const Mat3 faces_to_world = o.faces.empty() ? Mat3{} : o.faces.to_index.inverse();
   for (int pass = 0; pass < o.passes; ++pass) {
     context.report("fit", static_cast<double>(pass) / o.passes);
     std::fill(num.begin(), num.end(), 0.0);
@@ -302,8 +303,15 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
       if (hold[v] || !(den[v] > 0)) continue;
       const double t = std::clamp(-o.damping * num[v] / den[v], -o.max_step, o.max_step);
       Vec3 q = p[v] + t * normal[v];
-      if (o.box.lo.x < o.box.hi.x)
+      if (!o.faces.empty()) {  // oblique grid: clamped in index space (when outside only)
+        Vec3 u = o.faces.to_index * (q - o.faces.origin);
+        bool out = false;
+        for (int k = 0; k < 3; ++k)
+          if (u[k] < 0 || u[k] > o.faces.extent[k]) u[k] = std::clamp(u[k], 0.0, o.faces.extent[k]), out = true;
+        if (out) q = o.faces.origin + faces_to_world * u;
+      } else if (o.box.lo.x < o.box.hi.x) {
         for (int k = 0; k < 3; ++k) q[k] = std::clamp(q[k], o.box.lo[k], o.box.hi[k]);
+      }
       next[v] = q;
       moved.push_back(v);
     }

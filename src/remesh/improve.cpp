@@ -23,6 +23,7 @@
 // Everything is serial and visits elements in a fixed order, so the result is deterministic.
 #include "adamesh/improve.h"
 #include "adamesh/metrics.h"
+#include "adamesh/volume.h"
 
 #include "adamesh/context.h"
 
@@ -178,6 +179,7 @@ class Improver {
     // z max 110.4) lies up to half a float step off the exact face, so it was neither pinned to
     // its face nor allowed any move, and the slivers there stayed (docs/QUALITY.md).
     if (has_box_) o_.box = widened_to_floats(o_.box);
+    if (!o_.faces.empty()) set_oblique_faces();
     mark_boundary_vertices();
   }
 
@@ -283,6 +285,9 @@ class Improver {
   double dev_ = 0;
   double flip_below_ = 0;  ///< > 0: only pairs with a triangle below this flip (radians)
   bool has_box_ = false;
+  bool oblique_ = false;  ///< o_.faces set: inside and on-face tests in the grid's index space
+  std::array<Vec3, 3> face_normal_{};
+  std::array<double, 3> face_tol_{};
   bool small_moves_ = false;  ///< M0: every move under ¾ of the shortest incident edge
   double decimate_floor_deg_ = 0;
   std::size_t decimate_stuck_at_ = 0;
@@ -373,8 +378,35 @@ class Improver {
         for (auto v : t_[t]) inc_[fill[v]++] = static_cast<std::uint32_t>(t);
   }
 
+  /// Oblique grids: index-space faces. Tolerance: a float step of the largest world coordinate
+  /// of the grid's corners, in index units along each axis (the stored vertices are floats).
+  void set_oblique_faces() {
+    oblique_ = has_box_ = true;
+    const GridFaces& f = o_.faces;
+    const Mat3 to_world = f.to_index.inverse();
+    double big = 0;
+    for (int c = 0; c < 8; ++c) {
+      const Vec3 u{c & 1 ? f.extent.x : 0, c & 2 ? f.extent.y : 0, c & 4 ? f.extent.z : 0};
+      const Vec3 w = f.origin + to_world * u;
+      big = std::max({big, std::abs(w.x), std::abs(w.y), std::abs(w.z)});
+    }
+    for (int a = 0; a < 3; ++a) {
+      const Vec3 row = f.to_index.row(a);
+      face_normal_[a] = normalized(row);
+      face_tol_[a] = (std::abs(row.x) + std::abs(row.y) + std::abs(row.z)) * 0x1p-23 * big +
+                     1e-9 * f.extent[a];
+    }
+  }
+  Vec3 grid_index(const Vec3& q) const { return o_.faces.to_index * (q - o_.faces.origin); }
+
   bool inside_box(const Vec3& q) const {
     if (!has_box_) return true;
+    if (oblique_) {
+      const Vec3 u = grid_index(q);
+      for (int a = 0; a < 3; ++a)
+        if (u[a] < -face_tol_[a] || u[a] > o_.faces.extent[a] + face_tol_[a]) return false;
+      return true;
+    }
     return q.x >= o_.box.lo.x && q.y >= o_.box.lo.y && q.z >= o_.box.lo.z &&
            q.x <= o_.box.hi.x && q.y <= o_.box.hi.y && q.z <= o_.box.hi.z;
   }
@@ -1634,6 +1666,12 @@ class Improver {
   std::array<bool, 3> pinned_axes(std::uint32_t v) const {
     std::array<bool, 3> pinned{};
     if (!has_box_) return pinned;
+    if (oblique_) {
+      const Vec3 u = grid_index(p_[v]);
+      for (int a = 0; a < 3; ++a)
+        pinned[a] = std::abs(u[a]) <= face_tol_[a] || std::abs(u[a] - o_.faces.extent[a]) <= face_tol_[a];
+      return pinned;
+    }
     for (int a = 0; a < 3; ++a) {
       // On a face: within a float step of it (the stored vertex and the computed face differ
       // by up to half of one).
@@ -1675,7 +1713,10 @@ class Improver {
       const auto pa = pinned_axes(a), pb = pinned_axes(b);
       const int na = pa[0] + pa[1] + pa[2], nb = pb[0] + pb[1] + pb[2];
       bool same_face = false;
-      for (int ax = 0; ax < 3; ++ax) same_face |= pa[ax] && pb[ax] && p_[a][ax] == p_[b][ax];
+      for (int ax = 0; ax < 3; ++ax)
+        same_face |= pa[ax] && pb[ax] &&
+                     (oblique_ ? std::abs(grid_index(p_[a])[ax] - grid_index(p_[b])[ax]) <= 2 * face_tol_[ax]
+                               : p_[a][ax] == p_[b][ax]);
       if (!same_face || (na > 1 && nb > 1)) continue;
       if (nb > 1) std::swap(a, b);  // a box-edge vertex stays where it is
       neighbours(a, rings_.na);
@@ -1820,7 +1861,10 @@ class Improver {
     std::array<Vec3, 7> dirs = {t1, -1.0 * t1, t2, -1.0 * t2, n, -1.0 * n, goal - start};
     for (Vec3& d : dirs) {
       for (int a = 0; a < 3; ++a)
-        if (pinned[a]) d[a] = 0;
+        if (pinned[a]) {
+          if (oblique_) d = d - dot(d, face_normal_[a]) * face_normal_[a];  // along the face
+          else d[a] = 0;
+        }
       d = normalized(d);
     }
     const double target = o_.target_angle_deg * kDeg;
@@ -1928,6 +1972,16 @@ ImproveStats improve_base_mesh(BaseMesh& base, const ScalarField* field, double 
   remap(base.border);
   remap(base.component);
   return st;
+}
+
+GridFaces oblique_faces(const Grid& grid) {
+  GridFaces f;
+  if (grid.axis_aligned()) return f;
+  f.to_index = grid.index_to_world_matrix().inverse();
+  f.origin = grid.origin;
+  for (int a = 0; a < 3; ++a) f.extent[a] = static_cast<double>(std::max<std::int64_t>(grid.dims[a] - 1, 0));
+  if (!(f.extent.x > 0 && f.extent.y > 0 && f.extent.z > 0)) return GridFaces{};  // a flat grid: the box
+  return f;
 }
 
 }  // namespace adamesh
