@@ -182,9 +182,10 @@ TEST(ScanBounds, SpacingThatIsNotAFloatMeshesAsWell) {
   double pct[2] = {0, 0};
   int i = 0;
   for (const char* spacing : {"0.8,0.8,1.6", "0.75,0.75,1.5"}) {
-    const std::string in = tmp.file("s.raw") + " --dims 110,90,70 --type uint8 --spacing " + spacing;
-    const auto r = run_cli("extract " + in + " --iso 140.5 --triangles 20000 -o " + tmp.file("a.ply") +
-                           " --quiet");
+    const std::string in =
+        tmp.file("s.raw") + " --dims 110,90,70 --type uint8 --spacing " + spacing;
+    const auto r = run_cli("extract " + in + " --iso 140.5 --triangles 20000 -o " +
+                           tmp.file("a.ply") + " --quiet");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const Mesh a = read_mesh(tmp.file("a.ply"));
     EXPECT_NEAR(static_cast<double>(a.num_triangles()), 20000.0, 200.0) << spacing;
@@ -202,8 +203,8 @@ TEST(ScanBounds, SpacingThatIsNotAFloatMeshesAsWell) {
 // An oblique grid (NRRD space directions rotated 20° about z, spacing 0.8, 0.8, 1.6): its world
 // box holds more than the grid, and the improvement and the fit took the box for the volume.
 // Before 2026-12-04 the 20k mesh had vertices 1.28 voxel outside the grid, border vertices never
-// moved (their faces are not axis planes) and a 0.00° triangle (0.50 % under 20°). Now every vertex
-// is inside the grid (to float rounding), 11.9° and 0.05 %.
+// moved (their faces are not axis planes) and a 0.00° triangle (0.50 % under 20°). Now every
+// vertex is inside the grid (to float rounding), 11.9° and 0.05 %.
 TEST(ScanBounds, ObliqueGridStaysInsideAndWellShaped) {
   TempDir tmp;
   testutil::write_bytes(tmp.file("s.raw"), noisy_scan_bytes());
@@ -212,9 +213,10 @@ TEST(ScanBounds, ObliqueGridStaysInsideAndWellShaped) {
   std::ostringstream h;
   h.precision(17);
   h << "NRRD0004\ntype: uint8\ndimension: 3\nspace: left-posterior-superior\nsizes: 110 90 70\n"
-    << "space directions: (" << c * spacing.x << "," << s * spacing.x << ",0) (" << -s * spacing.y << ","
-    << c * spacing.y << ",0) (0,0," << spacing.z << ")\nspace origin: (" << origin.x << "," << origin.y
-    << "," << origin.z << ")\nencoding: raw\ndata file: s.raw\n";
+    << "space directions: (" << c * spacing.x << "," << s * spacing.x << ",0) ("
+    << -s * spacing.y << "," << c * spacing.y << ",0) (0,0," << spacing.z << ")\n"
+    << "space origin: (" << origin.x << "," << origin.y << "," << origin.z << ")\n"
+    << "encoding: raw\ndata file: s.raw\n";
   testutil::write_bytes(tmp.file("s.nhdr"), h.str());
   const auto r = run_cli("extract " + tmp.file("s.nhdr") + " --iso 140.5 --triangles 20000 -o " +
                          tmp.file("a.ply") + " --quiet");
@@ -225,7 +227,8 @@ TEST(ScanBounds, ObliqueGridStaysInsideAndWellShaped) {
   double worst = 0;  // farthest outside the grid, in voxels
   for (std::size_t v = 0; v < a.num_vertices(); ++v) {
     const Vec3 d = a.vertex(v) - origin;
-    const double u[3] = {(c * d.x + s * d.y) / spacing.x, (-s * d.x + c * d.y) / spacing.y, d.z / spacing.z};
+    const double u[3] = {(c * d.x + s * d.y) / spacing.x, (-s * d.x + c * d.y) / spacing.y,
+                         d.z / spacing.z};
     for (int k = 0; k < 3; ++k) worst = std::max({worst, -u[k], u[k] - top[k]});
   }
   EXPECT_LT(worst, 1e-4);  // float rounding of the stored coordinates: 8e-6

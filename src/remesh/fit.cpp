@@ -307,7 +307,10 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
         Vec3 u = o.faces.to_index * (q - o.faces.origin);
         bool out = false;
         for (int k = 0; k < 3; ++k)
-          if (u[k] < 0 || u[k] > o.faces.extent[k]) u[k] = std::clamp(u[k], 0.0, o.faces.extent[k]), out = true;
+          if (u[k] < 0 || u[k] > o.faces.extent[k]) {
+            u[k] = std::clamp(u[k], 0.0, o.faces.extent[k]);
+            out = true;
+          }
         if (out) q = o.faces.origin + faces_to_world * u;
       } else if (o.box.lo.x < o.box.hi.x) {
         for (int k = 0; k < 3; ++k) q[k] = std::clamp(q[k], o.box.lo[k], o.box.hi[k]);

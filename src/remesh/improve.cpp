@@ -1669,7 +1669,8 @@ class Improver {
     if (oblique_) {
       const Vec3 u = grid_index(p_[v]);
       for (int a = 0; a < 3; ++a)
-        pinned[a] = std::abs(u[a]) <= face_tol_[a] || std::abs(u[a] - o_.faces.extent[a]) <= face_tol_[a];
+        pinned[a] = std::abs(u[a]) <= face_tol_[a] ||
+                    std::abs(u[a] - o_.faces.extent[a]) <= face_tol_[a];
       return pinned;
     }
     for (int a = 0; a < 3; ++a) {
@@ -1678,7 +1679,8 @@ class Improver {
       const double side = 1e-9 * (o_.box.hi[a] - o_.box.lo[a]);
       const double flo = std::max(side, 0x1p-23 * std::abs(o_.box.lo[a]));
       const double fhi = std::max(side, 0x1p-23 * std::abs(o_.box.hi[a]));
-      pinned[a] = std::abs(p_[v][a] - o_.box.lo[a]) <= flo || std::abs(p_[v][a] - o_.box.hi[a]) <= fhi;
+      pinned[a] = std::abs(p_[v][a] - o_.box.lo[a]) <= flo ||
+                  std::abs(p_[v][a] - o_.box.hi[a]) <= fhi;
     }
     return pinned;
   }
@@ -1713,10 +1715,12 @@ class Improver {
       const auto pa = pinned_axes(a), pb = pinned_axes(b);
       const int na = pa[0] + pa[1] + pa[2], nb = pb[0] + pb[1] + pb[2];
       bool same_face = false;
-      for (int ax = 0; ax < 3; ++ax)
-        same_face |= pa[ax] && pb[ax] &&
-                     (oblique_ ? std::abs(grid_index(p_[a])[ax] - grid_index(p_[b])[ax]) <= 2 * face_tol_[ax]
-                               : p_[a][ax] == p_[b][ax]);
+      for (int ax = 0; ax < 3; ++ax) {
+        if (!pa[ax] || !pb[ax]) continue;
+        same_face |= oblique_ ? std::abs(grid_index(p_[a])[ax] - grid_index(p_[b])[ax]) <=
+                                    2 * face_tol_[ax]
+                              : p_[a][ax] == p_[b][ax];
+      }
       if (!same_face || (na > 1 && nb > 1)) continue;
       if (nb > 1) std::swap(a, b);  // a box-edge vertex stays where it is
       neighbours(a, rings_.na);
@@ -1979,8 +1983,10 @@ GridFaces oblique_faces(const Grid& grid) {
   if (grid.axis_aligned()) return f;
   f.to_index = grid.index_to_world_matrix().inverse();
   f.origin = grid.origin;
-  for (int a = 0; a < 3; ++a) f.extent[a] = static_cast<double>(std::max<std::int64_t>(grid.dims[a] - 1, 0));
-  if (!(f.extent.x > 0 && f.extent.y > 0 && f.extent.z > 0)) return GridFaces{};  // a flat grid: the box
+  for (int a = 0; a < 3; ++a)
+    f.extent[a] = static_cast<double>(std::max<std::int64_t>(grid.dims[a] - 1, 0));
+  // A flat grid (a single slice): its box.
+  if (!(f.extent.x > 0 && f.extent.y > 0 && f.extent.z > 0)) return GridFaces{};
   return f;
 }
 
