@@ -232,6 +232,11 @@ TEST(ScanBounds, ObliqueGridStaysInsideAndWellShaped) {
     for (int k = 0; k < 3; ++k) worst = std::max({worst, -u[k], u[k] - top[k]});
   }
   EXPECT_LT(worst, 1e-4);  // float rounding of the stored coordinates: 8e-6
+  // `stats --field` says the same (it was 8 vertices, 1.283 voxel, before).
+  const auto sf = run_cli("stats " + tmp.file("a.ply") + " --field " + tmp.file("s.nhdr") +
+                          " --iso 140.5 --json");
+  ASSERT_EQ(sf.exit_code, 0) << sf.err;
+  EXPECT_EQ(nlohmann::json::parse(sf.out)["vertices_outside_volume"], 0);
   const auto st = run_cli("stats " + tmp.file("a.ply") + " --json");
   ASSERT_EQ(st.exit_code, 0) << st.err;
   const auto q = nlohmann::json::parse(st.out);

@@ -130,6 +130,18 @@ TEST(StatsCli, RawVolumeFieldWithInputOptions) {
   // a voxel (0.5) of it, and the mesh faces out of the bright inside.
   EXPECT_LT(j["distance"]["max"].get<double>(), 0.1);
   EXPECT_LT(j["eps_n"].get<double>(), 0.05);
+  EXPECT_EQ(j["vertices_outside_volume"], 0);  // marching cubes stays inside
+  EXPECT_EQ(j["outside_volume_max_voxels"], 0.0);
+  // A vertex 0.3 (0.6 voxel) beyond the x = 0 face: counted, and how far.
+  testutil::write_bytes(tmp.file("out.off"), "OFF\n3 1 0\n-0.3 5 5\n5 5 5\n5 6 5\n3 0 1 2\n");
+  const auto o = run_cli("stats '" + tmp.file("out.off") + "' --field " + in + " --iso 100.5 --json");
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  const json k = parse(o.out);
+  EXPECT_EQ(k["vertices_outside_volume"], 1);
+  EXPECT_NEAR(k["outside_volume_max_voxels"].get<double>(), 0.6, 1e-5);
+  const auto t = run_cli("stats '" + tmp.file("out.off") + "' --field " + in + " --iso 100.5");
+  EXPECT_NE(t.out.find("1 vertex outside the volume's grid, the farthest 0.6 voxel"),
+            std::string::npos) << t.out;
   // Without --iso a volume file has no default: usage error naming the input.
   const auto u = run_cli("stats '" + tmp.file("ball.ply") + "' --field " + in);
   EXPECT_EQ(u.exit_code, 1);

@@ -67,6 +67,7 @@ int cmd_stats(const Argv& argv) {
     fo.tolerance = 1e-5 * fo.max_step;
     fo.samples = samples;
     report.field = field_error(mesh, *in.field, iso, fo, ctx);
+    report.volume_bounds = vertices_outside_volume(mesh, in.volume->grid);
   }
   if (const auto ref_path = args.get("--reference")) {
     const Mesh ref = read_mesh(*ref_path);

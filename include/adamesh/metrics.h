@@ -194,6 +194,16 @@ std::optional<std::vector<std::pair<std::uint32_t, std::uint32_t>>> intersecting
 // ---------------------------------------------------------------------- reports
 
 /// Everything `adamesh stats` prints.
+struct Grid;
+
+/// Mesh vertices outside a volume's grid (in index space, so oblique grids are exact): beyond a
+/// face by more than the rounding of float coordinates.
+struct VolumeBoundsReport {
+  std::int64_t outside = 0;  ///< vertices outside the grid
+  double max_voxels = 0;     ///< the farthest of them beyond a face, in voxels (index units)
+};
+VolumeBoundsReport vertices_outside_volume(const Mesh& mesh, const Grid& grid);
+
 struct MeshReport {
   TopologyReport topology;
   QualityReport quality;
@@ -201,6 +211,7 @@ struct MeshReport {
   std::optional<double> volume;  ///< closed and oriented meshes only
   Box bounds;
   std::optional<FieldErrorReport> field;
+  std::optional<VolumeBoundsReport> volume_bounds;  ///< with a volume (stats --field)
   std::optional<HausdorffReport> hausdorff;
   std::int64_t self_intersecting_pairs = 0;  ///< self_intersections(mesh).pairs (−1: not measured)
 };

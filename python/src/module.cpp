@@ -370,6 +370,7 @@ std::string run_stats(const PyMesh& mesh, py::object field, std::optional<double
       fo.tolerance = 1e-5 * fo.max_step;
       fo.samples = samples;
       report.field = field_error(mesh.mesh, *in->field, value, fo, ctx);
+      report.volume_bounds = vertices_outside_volume(mesh.mesh, in->volume->grid);
     }
     if (reference) {
       HausdorffOptions ho;

@@ -164,6 +164,8 @@ def test_stats_match_the_cli(tmp_path):
                         "--reference", tmp_path / "mc.ply")
     py = adamesh.stats(tmp_path / "m.ply", field=HEAD, iso=500.5, reference=tmp_path / "mc.ply")
     assert py == json.loads(out)
+    assert py["vertices_outside_volume"] == 0  # every vertex inside the head's grid
+    assert adamesh.stats(r.mesh)["vertices_outside_volume"] is None  # no field, no volume
     assert adamesh.stats(r.mesh)["triangles"] == len(r.faces)
 
 

@@ -13,12 +13,14 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
 #include <memory>
 
 #include "adamesh/metrics.h"
+#include "adamesh/volume.h"
 #include "metrics/adjacency.h"
 #include "metrics/buffers.h"
 #include "metrics/mesh_check.h"
@@ -228,6 +230,40 @@ FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double 
     r.flat_gradient_triangles = flat.load();
     return r;
   });
+}
+
+VolumeBoundsReport vertices_outside_volume(const Mesh& mesh, const Grid& grid) {
+  VolumeBoundsReport r;
+  const Mat3 to_world = grid.index_to_world_matrix();
+  const Mat3 to_index = to_world.inverse();
+  // Float rounding of the stored coordinates, in index units: a float step of the grid's largest
+  // world coordinate along each index axis.
+  double big = 0;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 u{c & 1 ? static_cast<double>(grid.dims[0] - 1) : 0.0,
+                 c & 2 ? static_cast<double>(grid.dims[1] - 1) : 0.0,
+                 c & 4 ? static_cast<double>(grid.dims[2] - 1) : 0.0};
+    const Vec3 w = grid.origin + to_world * u;
+    big = std::max({big, std::abs(w.x), std::abs(w.y), std::abs(w.z)});
+  }
+  std::array<double, 3> tol{};
+  for (int a = 0; a < 3; ++a) {
+    const Vec3 row = to_index.row(a);
+    tol[a] = (std::abs(row.x) + std::abs(row.y) + std::abs(row.z)) * 0x1p-23 * big;
+  }
+  for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
+    const Vec3 u = to_index * (mesh.vertex(v) - grid.origin);
+    double beyond = 0;  // past a face by more than the rounding: how far
+    for (int a = 0; a < 3; ++a) {
+      const double past = std::max(-u[a], u[a] - static_cast<double>(grid.dims[a] - 1));
+      if (past > tol[a]) beyond = std::max(beyond, past);
+    }
+    if (beyond > 0) {
+      ++r.outside;
+      r.max_voxels = std::max(r.max_voxels, beyond);
+    }
+  }
+  return r;
 }
 
 }  // namespace adamesh

@@ -89,6 +89,9 @@ std::string report_json(const MeshReport& r) {
     j["eps_e_sqrt_rel"] = nullptr;
     j["eps_n"] = nullptr;
   }
+  j["vertices_outside_volume"] = r.volume_bounds ? json(r.volume_bounds->outside) : json(nullptr);
+  j["outside_volume_max_voxels"] =
+      r.volume_bounds ? json(r.volume_bounds->max_voxels) : json(nullptr);
   if (r.hausdorff) {
     const HausdorffReport& h = *r.hausdorff;
     j["hausdorff"] = {{"a_to_b", h.a_to_b.max}, {"b_to_a", h.b_to_a.max},
@@ -151,6 +154,15 @@ std::string report_text(const MeshReport& r) {
     if (f.unconverged || f.flat_gradient_triangles)
       os << "  unconverged projections " << f.unconverged << ", flat-gradient triangles "
          << f.flat_gradient_triangles << "\n";
+  }
+  if (r.volume_bounds) {
+    if (r.volume_bounds->outside == 0)
+      os << "  every vertex inside the volume's grid\n";
+    else
+      os << "  " << r.volume_bounds->outside
+         << (r.volume_bounds->outside == 1 ? " vertex" : " vertices")
+         << " outside the volume's grid, the farthest " << fmt("%.4g", r.volume_bounds->max_voxels)
+         << " voxel beyond its face\n";
   }
   if (r.hausdorff) {
     const HausdorffReport& h = *r.hausdorff;
