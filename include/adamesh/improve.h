@@ -33,6 +33,7 @@ struct Grid;
 struct GridFaces {
   Mat3 to_index{};
   Vec3 origin{}, extent{};
+  Vec3 rounding{};  ///< Grid::float_rounding_in_index(): how far off its face a vertex may be
   bool empty() const { return !(extent.x > 0); }
 };
 /// The faces of `grid` when it is oblique, else empty.

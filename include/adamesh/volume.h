@@ -67,6 +67,9 @@ struct Grid {
   double min_spacing() const noexcept;
   /// True when direction is the identity (axis-aligned grid).
   bool axis_aligned() const noexcept;
+  /// How far (index units, per index axis) a mesh's float vertex may lie off a face it is on:
+  /// one float step of the grid's largest world coordinate, along each index axis.
+  Vec3 float_rounding_in_index() const noexcept;
 };
 
 /// Largest world coordinate magnitude adamesh accepts (inputs, grids, hierarchies): meshes store

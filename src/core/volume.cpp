@@ -124,6 +124,19 @@ void check_world_range(const Grid& g, const std::string& where) {
 
 bool Grid::axis_aligned() const noexcept { return direction == Mat3::identity(); }
 
+Vec3 Grid::float_rounding_in_index() const noexcept {
+  const Box b = world_bounds();
+  double big = 0;
+  for (int k = 0; k < 3; ++k) big = std::max({big, std::abs(b.lo[k]), std::abs(b.hi[k])});
+  const Mat3 to_index = index_to_world_matrix().inverse();
+  Vec3 r;
+  for (int a = 0; a < 3; ++a) {
+    const Vec3 row = to_index.row(a);
+    r[a] = (std::abs(row.x) + std::abs(row.y) + std::abs(row.z)) * 0x1p-23 * big;
+  }
+  return r;
+}
+
 SampleBuffer::SampleBuffer(std::size_t bytes)
     : data_(new (std::nothrow) std::byte[bytes == 0 ? 1 : bytes]), size_(bytes) {
   if (!data_) throw std::bad_alloc();

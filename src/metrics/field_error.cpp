@@ -13,7 +13,6 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
-#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -234,23 +233,8 @@ FieldErrorReport field_error(const Mesh& mesh, const ScalarField& field, double 
 
 VolumeBoundsReport vertices_outside_volume(const Mesh& mesh, const Grid& grid) {
   VolumeBoundsReport r;
-  const Mat3 to_world = grid.index_to_world_matrix();
-  const Mat3 to_index = to_world.inverse();
-  // Float rounding of the stored coordinates, in index units: a float step of the grid's largest
-  // world coordinate along each index axis.
-  double big = 0;
-  for (int c = 0; c < 8; ++c) {
-    const Vec3 u{c & 1 ? static_cast<double>(grid.dims[0] - 1) : 0.0,
-                 c & 2 ? static_cast<double>(grid.dims[1] - 1) : 0.0,
-                 c & 4 ? static_cast<double>(grid.dims[2] - 1) : 0.0};
-    const Vec3 w = grid.origin + to_world * u;
-    big = std::max({big, std::abs(w.x), std::abs(w.y), std::abs(w.z)});
-  }
-  std::array<double, 3> tol{};
-  for (int a = 0; a < 3; ++a) {
-    const Vec3 row = to_index.row(a);
-    tol[a] = (std::abs(row.x) + std::abs(row.y) + std::abs(row.z)) * 0x1p-23 * big;
-  }
+  const Mat3 to_index = grid.index_to_world_matrix().inverse();
+  const Vec3 tol = grid.float_rounding_in_index();
   for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
     const Vec3 u = to_index * (mesh.vertex(v) - grid.origin);
     double beyond = 0;  // past a face by more than the rounding: how far

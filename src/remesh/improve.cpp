@@ -378,23 +378,13 @@ class Improver {
         for (auto v : t_[t]) inc_[fill[v]++] = static_cast<std::uint32_t>(t);
   }
 
-  /// Oblique grids: index-space faces. Tolerance: a float step of the largest world coordinate
-  /// of the grid's corners, in index units along each axis (the stored vertices are floats).
+  /// Oblique grids: index-space faces, a vertex on one within the float rounding of its
+  /// coordinates.
   void set_oblique_faces() {
     oblique_ = has_box_ = true;
-    const GridFaces& f = o_.faces;
-    const Mat3 to_world = f.to_index.inverse();
-    double big = 0;
-    for (int c = 0; c < 8; ++c) {
-      const Vec3 u{c & 1 ? f.extent.x : 0, c & 2 ? f.extent.y : 0, c & 4 ? f.extent.z : 0};
-      const Vec3 w = f.origin + to_world * u;
-      big = std::max({big, std::abs(w.x), std::abs(w.y), std::abs(w.z)});
-    }
     for (int a = 0; a < 3; ++a) {
-      const Vec3 row = f.to_index.row(a);
-      face_normal_[a] = normalized(row);
-      face_tol_[a] = (std::abs(row.x) + std::abs(row.y) + std::abs(row.z)) * 0x1p-23 * big +
-                     1e-9 * f.extent[a];
+      face_normal_[a] = normalized(o_.faces.to_index.row(a));
+      face_tol_[a] = o_.faces.rounding[a] + 1e-9 * o_.faces.extent[a];
     }
   }
   Vec3 grid_index(const Vec3& q) const { return o_.faces.to_index * (q - o_.faces.origin); }
@@ -1983,6 +1973,7 @@ GridFaces oblique_faces(const Grid& grid) {
   if (grid.axis_aligned()) return f;
   f.to_index = grid.index_to_world_matrix().inverse();
   f.origin = grid.origin;
+  f.rounding = grid.float_rounding_in_index();
   for (int a = 0; a < 3; ++a)
     f.extent[a] = static_cast<double>(std::max<std::int64_t>(grid.dims[a] - 1, 0));
   // A flat grid (a single slice): its box.
