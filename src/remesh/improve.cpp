@@ -1760,13 +1760,14 @@ class Improver {
   }
 
   /// Largest distance to the surface of the points around v with v at q: q, the midpoints of
-  /// v's edges and the centroids of its triangles (infinity where a projection fails). `orient`
+  /// v's edges and the centroids of its triangles (infinity where a projection fails); once it
+  /// exceeds `limit` the rest is not measured (the result is then some value above it). `orient`
   /// (one per triangle around v): the side of the surface each triangle faces, the sign of its
   /// normal against ∇f where its centroid projects (0: unknown); `learn` sets them, else a
   /// triangle that turned to the other side makes the result infinite (a thin speck's triangles
   /// may turn far, which the usual 70° guard forbids, but never inside out).
   double ring_deviation(std::uint32_t v, const Vec3& q, std::vector<std::int8_t>& orient,
-                        bool learn) const {
+                        bool learn, double limit = std::numeric_limits<double>::infinity()) const {
     if (!field_) return 0;
     constexpr double kInf = std::numeric_limits<double>::infinity();
     double e = 0;
@@ -1789,7 +1790,7 @@ class Improver {
       const std::int8_t s = side > 0 ? 1 : side < 0 ? -1 : 0;
       if (learn) orient[i] = s;
       else if (orient[i] != 0 && s != orient[i]) return kInf;
-      if (!std::isfinite(e)) return e;
+      if (!std::isfinite(e) || e > limit) return e;
     }
     return std::max(e, surface_distance(q, o_.voxel));
   }
@@ -1841,13 +1842,16 @@ class Improver {
       }
       return mn;
     };
+    const double target = o_.target_angle_deg * kDeg;
+    double cur = ring_score(start);
+    if (cur < 0 || cur >= target) return false;  // before the projections below: they cost
     std::vector<std::int8_t> orient(nt, 0);
     const double dev0 = ring_deviation(v, start, orient, true);
     const double tol = widen * (std::isfinite(dev0) ? std::max(dev_, dev0) : dev_);
     auto admissible = [&](const Vec3& q) {
       if (!inside_box(q) || distance(q, start) > reach) return false;
       if (o_.max_error > 0 && !ring_error_ok(v, q)) return false;
-      return ring_deviation(v, q, orient, false) <= tol;
+      return ring_deviation(v, q, orient, false, tol) <= tol;
     };
     Vec3 t1 = cross(n, std::abs(n.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0});
     t1 = normalized(t1);
@@ -1861,9 +1865,6 @@ class Improver {
         }
       d = normalized(d);
     }
-    const double target = o_.target_angle_deg * kDeg;
-    double cur = ring_score(start);
-    if (cur < 0) return false;
     double h = 0.25 * lsum / nt;
     const double h_min = 0.02 * h;
     Vec3 p = start;
