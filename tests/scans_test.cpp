@@ -39,12 +39,13 @@ struct Scan {
 // MRI head 0.35 % / 9.6° / 219, ironprot 0 % / 20.1° / 0, neghip 0.01 % / 18.6° / 53, hydrogen
 // 0 % / 23.7° / 0, carotid 0 % / 20.0° / 37, bolt and vase 0 % / 23.3° / 0. The share under 20°
 // is asserted at issue 12's target (< 1 %) everywhere, the smallest angle at its 10° target
-// where it is met and at the measured value less a margin on the skull and the MRI head
-// (docs/QUALITY.md).
+// where it is met and at the measured value less a margin on the skull (docs/QUALITY.md). The MRI
+// head's two back-to-back 9.6° needles on a 0.50 edge held by the link condition are gone since
+// the graded needle splits (2026-12-04): 0.15 % / 11.7° / 145.
 const Scan kScans[] = {
     {"ct_headsq/quarter.nhdr", 500.5, 1.0, 10.0, 1.0},
     {"ct_headsq/quarter.nhdr", 1150.5, 1.0, 6.0, 1.0},
-    {"mri_headmr/HeadMRVolume.mhd", 20.5, 1.0, 7.0, 2.0},
+    {"mri_headmr/HeadMRVolume.mhd", 20.5, 1.0, 10.0, 2.0},
     {"ironprot/ironProt.vtk", 128.5, 1.0, 10.0, 1.0},
     {"neghip/neghip.slc", 100.5, 1.0, 10.0, 1.0},
     {"hydrogen/hydrogen.vti", 0.1, 1.0, 10.0, 1.0},

@@ -107,6 +107,9 @@ struct ImproveStats {
   /// With `rescue_below_deg`: specks replaced by a tetrahedron or an octahedron, and specks left
   /// as they were because the replacement crossed another triangle.
   std::size_t specks = 0, specks_undone = 0;
+  /// With `rescue_below_deg`: graded splits of needles held by the topology (kept ones; also
+  /// counted in `splits`).
+  std::size_t needle_splits = 0;
 };
 
 /// Improves `mesh` in place. `fixed` (empty, or one flag per vertex): vertices that must not move

@@ -31,7 +31,8 @@ nlohmann::json improve_json(const ImproveStats& st) {
           {"rescued", st.rescued},
           {"rescue_undone", st.rescue_undone},
           {"specks", st.specks},
-          {"specks_undone", st.specks_undone}};
+          {"specks_undone", st.specks_undone},
+          {"needle_splits", st.needle_splits}};
 }
 
 nlohmann::json topology_json(const TopologyReport& t) {
