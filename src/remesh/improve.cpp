@@ -932,22 +932,17 @@ class Improver {
     if (speck_[a] || speck_[b]) return false;
     Vec3 m = 0.5 * (p_[a] + p_[b]);
     const double len = distance(p_[a], p_[b]);
-    if (!same_side) {
-      Vec3 q = m;
-      if (project(q, 0.25 * len) && distance(q, m) < 0.25 * len) m = q;
-    } else if (field_) {
-      ProjectOptions po;
-      po.max_steps = 8;
-      po.tolerance = 1e-4 * o_.voxel;
-      po.max_step = 0.25 * len;
-      const ProjectResult r = project_to_iso(*field_, iso_, m, po);
-      const Vec3 n = normalized(tri_normal(p_[a], p_[b], p_[x])) +
-                     normalized(tri_normal(p_[b], p_[a], p_[y]));
-      const double s = dot(n, r.gradient);
-      const double sa = dot(n, field_->gradient(p_[a])), sb = dot(n, field_->gradient(p_[b]));
-      if (r.residual <= 1e-2 * o_.voxel && distance(r.point, m) < 0.25 * len &&
-          ((s > 0 && sa > 0 && sb > 0) || (s < 0 && sa < 0 && sb < 0)) && inside_box(r.point))
-        m = r.point;
+    Vec3 q = m;
+    if (project(q, 0.25 * len) && distance(q, m) < 0.25 * len) {
+      bool side_ok = true;
+      if (same_side && field_) {
+        const Vec3 n = normalized(tri_normal(p_[a], p_[b], p_[x])) +
+                       normalized(tri_normal(p_[b], p_[a], p_[y]));
+        const double s = dot(n, field_->gradient(q));
+        const double sa = dot(n, field_->gradient(p_[a])), sb = dot(n, field_->gradient(p_[b]));
+        side_ok = (s > 0 && sa > 0 && sb > 0) || (s < 0 && sa < 0 && sb < 0);
+      }
+      if (side_ok) m = q;
     }
     if (has_box_ && !inside_box(m)) return false;
     const Vec3 n1 = tri_normal(p_[a], p_[b], p_[x]), n2 = tri_normal(p_[b], p_[a], p_[y]);
