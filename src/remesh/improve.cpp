@@ -328,7 +328,9 @@ class Improver {
   std::vector<std::uint8_t> fixed_, boundary_, tri_alive_;
   std::vector<std::uint8_t> speck_;  // per vertex: a speck's replacement (replace_specks) — stays
   std::vector<std::uint8_t> dirty_;  // per vertex: its ring changed since the last move pass
-  std::vector<std::uint32_t> inc_off_, inc_;  // vertex -> alive triangles (CSR)
+  // vertex v -> its alive triangles inc_[inc_off_[v] .. inc_end_[v]) (CSR after build_incidence;
+  // decimate_in_order() moves a merged vertex's list to the end of inc_)
+  std::vector<std::uint32_t> inc_off_, inc_end_, inc_;
   std::vector<std::array<double, 10>> quad_;  // decimate(): per-vertex error quadrics
   std::vector<std::uint8_t> near_border_;     // decimate(): see mark_near_border()
 
@@ -348,7 +350,7 @@ class Improver {
   bool ring_error_ok(std::uint32_t v, const Vec3& q) const {
     if (!field_ || o_.max_error <= 0) return true;
     const double bound = o_.max_error / kErrorSafety;
-    for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
+    for (std::uint32_t i = inc_off_[v]; i < inc_end_[v]; ++i) {
       const Tri& t = t_[inc_[i]];
       Vec3 a = p_[t[0]], b = p_[t[1]], c = p_[t[2]];
       const double before = tri_error(a, b, c);
@@ -395,7 +397,7 @@ class Improver {
 
   void mark_ring_dirty(std::uint32_t v) {
     dirty_[v] = 1;
-    for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i)
+    for (std::uint32_t i = inc_off_[v]; i < inc_end_[v]; ++i)
       for (auto u : t_[inc_[i]]) dirty_[u] = 1;
   }
 
@@ -410,6 +412,7 @@ class Improver {
     for (std::size_t t = 0; t < t_.size(); ++t)
       if (tri_alive_[t])
         for (auto v : t_[t]) inc_[fill[v]++] = static_cast<std::uint32_t>(t);
+    inc_end_.assign(inc_off_.begin() + 1, inc_off_.end());
   }
 
   /// Oblique grids: index-space faces, a vertex on one within the float rounding of its
@@ -548,7 +551,7 @@ class Improver {
                                      [&](const tbb::blocked_range<std::uint32_t>& r) {
         std::vector<std::uint32_t>& na = nbrs.local();
         for (std::uint32_t v = r.begin(); v != r.end(); ++v) {
-          if (!sel[v] || fixed_[v] || boundary_[v] || speck_[v] || inc_off_[v] == inc_off_[v + 1]) continue;
+          if (!sel[v] || fixed_[v] || boundary_[v] || speck_[v] || inc_off_[v] == inc_end_[v]) continue;
           neighbours(v, na);
           if (na.empty()) continue;
           Vec3 q{};
@@ -562,7 +565,7 @@ class Improver {
           const double floor_len = kUntangleMinEdge * o_.voxel;
           auto ring_ok = [&](const Vec3& c) {
             double before = std::numbers::pi, after = std::numbers::pi;
-            for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
+            for (std::uint32_t i = inc_off_[v]; i < inc_end_[v]; ++i) {
               const Tri& u = t_[inc_[i]];
               before = std::min(before, tri_min_angle(u));
               Vec3 x[3] = {p_[u[0]], p_[u[1]], p_[u[2]]};
@@ -608,7 +611,7 @@ class Improver {
             if (back[i]) continue;
             const std::uint32_t v = moves[i].first;
             bool short_edge = false;
-            for (std::uint32_t j = inc_off_[v]; j < inc_off_[v + 1] && !short_edge; ++j)
+            for (std::uint32_t j = inc_off_[v]; j < inc_end_[v] && !short_edge; ++j)
               for (auto w : t_[inc_[j]])
                 if (w != v && distance(p_[w], p_[v]) < floor_len) short_edge = true;
             if (!short_edge) continue;
@@ -742,7 +745,7 @@ class Improver {
       for (std::size_t i = 0; i < n; ++i) {
         // A vertex an earlier split of the round made is in that split's (taken) patch.
         if (vs[i] >= indexed) return false;
-        for (std::uint32_t j = inc_off_[vs[i]]; j < inc_off_[vs[i] + 1]; ++j) {
+        for (std::uint32_t j = inc_off_[vs[i]]; j < inc_end_[vs[i]]; ++j) {
           if (taken[inc_[j]]) return false;
           tris.push_back(inc_[j]);
           for (auto w : t_[inc_[j]]) vs.push_back(w);
@@ -1114,7 +1117,7 @@ class Improver {
   double ring_min_angle(std::uint32_t v, const Vec3& q, bool& flipped) const {
     double mn = std::numbers::pi;
     flipped = false;
-    for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
+    for (std::uint32_t i = inc_off_[v]; i < inc_end_[v]; ++i) {
       const Tri& t = t_[inc_[i]];
       Vec3 a = p_[t[0]], b = p_[t[1]], c = p_[t[2]];
       const Vec3 n_old = normalized(tri_normal(a, b, c));
@@ -1131,7 +1134,7 @@ class Improver {
   /// boundary, well shaped already, or no step improves its ring's smallest angle within the
   /// bounds). Reads the mesh only.
   bool plan_move(std::uint32_t v, Vec3& to) const {
-    if (fixed_[v] || boundary_[v] || speck_[v] || inc_off_[v + 1] == inc_off_[v]) return false;
+    if (fixed_[v] || boundary_[v] || speck_[v] || inc_end_[v] == inc_off_[v]) return false;
     const double target = o_.target_angle_deg * kDeg;
     bool flipped = false;
     const Vec3 pv = p_[v];
@@ -1139,8 +1142,8 @@ class Improver {
     if (old_min >= target) return false;
     Vec3 n{}, goal{};
     double lmin = std::numeric_limits<double>::max();
-    const double w = 1.0 / (inc_off_[v + 1] - inc_off_[v]);
-    for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
+    const double w = 1.0 / (inc_end_[v] - inc_off_[v]);
+    for (std::uint32_t i = inc_off_[v]; i < inc_end_[v]; ++i) {
       const Tri& t = t_[inc_[i]];
       const int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
       const Vec3 &p = p_[t[(k + 1) % 3]], &q = p_[t[(k + 2) % 3]];
@@ -1164,11 +1167,11 @@ class Improver {
     // 20°, smallest angle 0.16° → 1.5°; docs/QUALITY.md).
     if (!small_moves_ && old_min < kWideMoveBelowDeg * kDeg) {
       double lsum = 0;
-      for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
+      for (std::uint32_t i = inc_off_[v]; i < inc_end_[v]; ++i) {
         const Tri& t = t_[inc_[i]];
         lsum += distance(pv, p_[t[t[0] == v ? 1 : t[1] == v ? 2 : 0]]);
       }
-      lmin = std::max(lmin, lsum / (inc_off_[v + 1] - inc_off_[v]));
+      lmin = std::max(lmin, lsum / (inc_end_[v] - inc_off_[v]));
     }
     for (double lambda : {1.0, 0.5, 0.25}) {
       Vec3 q = pv + lambda * (goal - pv);
@@ -1223,7 +1226,7 @@ class Improver {
         wide.push_back({v, p_[v]});
       p_[v] = q;
       mark_ring_dirty(v);
-      for (std::uint32_t k = inc_off_[v]; k < inc_off_[v + 1]; ++k)
+      for (std::uint32_t k = inc_off_[v]; k < inc_end_[v]; ++k)
         for (auto u : t_[inc_[k]]) stale[u] = 1;
       ++moves;
     }
@@ -1232,7 +1235,7 @@ class Improver {
 
   double shortest_edge(std::uint32_t v) const {
     double l = std::numeric_limits<double>::max();
-    for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
+    for (std::uint32_t i = inc_off_[v]; i < inc_end_[v]; ++i) {
       const Tri& t = t_[inc_[i]];
       for (auto u : t)
         if (u != v) l = std::min(l, distance(p_[v], p_[u]));
@@ -1254,7 +1257,7 @@ class Improver {
     for (std::uint32_t i = 0; i < id.size(); ++i) tri_of[id[i]] = i;
     std::vector<std::uint8_t> involved(m.num_triangles(), 0);
     for (const auto& [v, old] : from)
-      for (std::uint32_t k = inc_off_[v]; k < inc_off_[v + 1]; ++k) involved[tri_of[inc_[k]]] = 1;
+      for (std::uint32_t k = inc_off_[v]; k < inc_end_[v]; ++k) involved[tri_of[inc_[k]]] = 1;
     auto set = [&](std::uint32_t v, const Vec3& q) {
       p_[v] = q;
       for (int k = 0; k < 3; ++k) m.positions[3 * v + k] = static_cast<float>(q[k]);
@@ -1295,7 +1298,7 @@ class Improver {
   /// the deviation bound of the removed vertex.
   bool remove_valence3(const Tri& tri, std::vector<std::uint8_t>& busy) {
     for (std::uint32_t v : tri) {
-      if (fixed_[v] || boundary_[v] || speck_[v] || inc_off_[v + 1] - inc_off_[v] != 3) continue;
+      if (fixed_[v] || boundary_[v] || speck_[v] || inc_end_[v] - inc_off_[v] != 3) continue;
       // Ring a -> b -> c around v from its three triangles (v, a, b), (v, b, c), (v, c, a).
       std::array<std::uint32_t, 3> next{}, from{};
       for (int i = 0; i < 3; ++i) {
@@ -1310,7 +1313,7 @@ class Improver {
         if (from[i] == b) c = next[i];
       if (c == UINT32_MAX || c == a || c == b) continue;
       bool low = false;
-      for (auto u : {a, b, c}) low |= inc_off_[u + 1] - inc_off_[u] <= 3 || busy[u];
+      for (auto u : {a, b, c}) low |= inc_end_[u] - inc_off_[u] <= 3 || busy[u];
       if (low) continue;
       const Vec3 n = tri_normal(p_[a], p_[b], p_[c]);
       double old_min = std::numbers::pi;
@@ -1337,7 +1340,7 @@ class Improver {
 
   void neighbours(std::uint32_t v, std::vector<std::uint32_t>& out) const {
     out.clear();
-    for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i)
+    for (std::uint32_t i = inc_off_[v]; i < inc_end_[v]; ++i)
       for (auto u : t_[inc_[i]])
         if (u != v) out.push_back(u);
     std::sort(out.begin(), out.end());
@@ -1362,7 +1365,7 @@ class Improver {
                           std::back_inserter(r.common));
     if (r.common.size() != 2) return false;  // link condition
     for (auto c : r.common)
-      if (inc_off_[c + 1] - inc_off_[c] <= 3) return false;
+      if (inc_end_[c] - inc_off_[c] <= 3) return false;
     // Where the merged vertex goes: the projected midpoint, else a's or b's own place (both on
     // the surface already), whichever leaves the best smallest angle; a fixed a stays.
     const double len = distance(p_[a], p_[b]);
@@ -1378,7 +1381,7 @@ class Improver {
     }
     double old_min = std::numbers::pi;
     for (auto v : {a, b})
-      for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i)
+      for (std::uint32_t i = inc_off_[v]; i < inc_end_[v]; ++i)
         old_min = std::min(old_min, tri_min_angle(t_[inc_[i]]));
     double best = -1;
     for (int c = 0; c < n_at; ++c) {
@@ -1397,7 +1400,7 @@ class Improver {
   double merged_min_angle(std::uint32_t a, std::uint32_t b, const Vec3& q) const {
     double new_min = std::numbers::pi;
     for (auto v : {a, b}) {
-      for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i) {
+      for (std::uint32_t i = inc_off_[v]; i < inc_end_[v]; ++i) {
         const Tri& u = t_[inc_[i]];
         const bool has_a = u[0] == a || u[1] == a || u[2] == a;
         const bool has_b = u[0] == b || u[1] == b || u[2] == b;
@@ -1428,7 +1431,7 @@ class Improver {
     for (auto v : r.na) dirty_[v] = 1;
     for (auto v : r.nb) dirty_[v] = 1;
     dirty_[a] = 1;
-    for (std::uint32_t i = inc_off_[b]; i < inc_off_[b + 1]; ++i) {
+    for (std::uint32_t i = inc_off_[b]; i < inc_end_[b]; ++i) {
       Tri& u = t_[inc_[i]];
       if (u[0] == a || u[1] == a || u[2] == a) {
         tri_alive_[inc_[i]] = 0;
@@ -1975,7 +1978,7 @@ class Improver {
       Vec3 q;
       collapse_ok(ba, bb, true, 0, q, rings_);  // the chosen one's point and rings again
       Undo u{ba, p_[ba], {}};
-      for (std::uint32_t i = inc_off_[bb]; i < inc_off_[bb + 1]; ++i)
+      for (std::uint32_t i = inc_off_[bb]; i < inc_end_[bb]; ++i)
         u.tris.push_back({inc_[i], t_[inc_[i]]});
       commit_collapse(ba, bb, q, rings_, busy);
       done.push_back(std::move(u));
@@ -1984,7 +1987,7 @@ class Improver {
     build_incidence();
     std::vector<std::int32_t> owner(t_.size(), -1);
     for (std::size_t c = 0; c < done.size(); ++c)
-      for (std::uint32_t i = inc_off_[done[c].a]; i < inc_off_[done[c].a + 1]; ++i)
+      for (std::uint32_t i = inc_off_[done[c].a]; i < inc_end_[done[c].a]; ++i)
         owner[inc_[i]] = static_cast<std::int32_t>(c);
     const std::vector<std::uint8_t> undo = changes_that_cross(owner, done.size());
     std::size_t kept = 0;
@@ -2048,11 +2051,11 @@ class Improver {
       if (!boundary_[a] || !boundary_[b] || speck_[a] || speck_[b]) continue;
       // ab is a boundary edge: t is its only triangle.
       std::size_t on_ab = 0;
-      for (std::uint32_t i = inc_off_[a]; i < inc_off_[a + 1]; ++i) {
+      for (std::uint32_t i = inc_off_[a]; i < inc_end_[a]; ++i) {
         const Tri& u = t_[inc_[i]];
         on_ab += u[0] == b || u[1] == b || u[2] == b;
       }
-      if (on_ab != 1 || inc_off_[c + 1] - inc_off_[c] < 2) continue;
+      if (on_ab != 1 || inc_end_[c] - inc_off_[c] < 2) continue;
       const auto pa = pinned_axes(a), pb = pinned_axes(b);
       const int na = pa[0] + pa[1] + pa[2], nb = pb[0] + pb[1] + pb[2];
       bool same_face = false;
@@ -2077,7 +2080,7 @@ class Improver {
         for (auto w : nx) {
           if (w == y || !boundary_[w]) continue;
           std::size_t shared = 0;
-          for (std::uint32_t i = inc_off_[x]; i < inc_off_[x + 1]; ++i) {
+          for (std::uint32_t i = inc_off_[x]; i < inc_end_[x]; ++i) {
             const Tri& u = t_[inc_[i]];
             shared += u[0] == w || u[1] == w || u[2] == w;
           }
@@ -2089,7 +2092,7 @@ class Improver {
       if (wa == UINT32_MAX || wa == wb) continue;
       double ring_min = std::numbers::pi;
       for (auto v : {a, b})
-        for (std::uint32_t i = inc_off_[v]; i < inc_off_[v + 1]; ++i)
+        for (std::uint32_t i = inc_off_[v]; i < inc_end_[v]; ++i)
           ring_min = std::min(ring_min, tri_min_angle(t_[inc_[i]]));
       std::array<Vec3, 3> at = {p_[a], p_[b], 0.5 * (p_[a] + p_[b])};
       const int n_at = na > 1 ? 1 : 3;
@@ -2125,7 +2128,7 @@ class Improver {
     ProjectOptions po;
     po.max_steps = 8;
     po.tolerance = 1e-3 * o_.voxel;
-    const std::uint32_t nt = inc_off_[v + 1] - inc_off_[v];
+    const std::uint32_t nt = inc_end_[v] - inc_off_[v];
     for (std::uint32_t i = 0; i < nt; ++i) {
       const Tri& t = t_[inc_[inc_off_[v] + i]];
       const int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
@@ -2149,7 +2152,7 @@ class Improver {
   /// One vertex's compass search, at most `reach` from where it is, the deviation bound times
   /// `widen`; true when it moved.
   bool rescue_vertex(std::uint32_t v, double reach, double widen) {
-    const std::uint32_t nt = inc_off_[v + 1] - inc_off_[v];
+    const std::uint32_t nt = inc_end_[v] - inc_off_[v];
     if (nt == 0 || speck_[v]) return false;
     // Box faces a border vertex lies on: it stays on them (slides along its face). A vertex
     // inside the mesh that lies on a face (a placement clamped into the box) may leave it inward:
