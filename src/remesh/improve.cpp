@@ -76,10 +76,10 @@ constexpr double kUntangleMinEdge = 0.01;
 /// length² of surface. Chosen among 0.001–1 on eight decimated scan budgets (docs/QUALITY.md
 /// "Decimation by quadric error"): every weight lowered the RMS distance about as much.
 constexpr double kDecimateLengthWeight = 0.1;
+/// A decimation sweep collapses at most this share of the triangles before the flips.
+constexpr double kDecimateSweep = 0.08;
 /// The same next to the volume's border (Improver::mark_near_border): mostly the edge length.
 constexpr double kDecimateBorderWeight = 10;
-/// A decimation pass looks at the cheapest kDecimateSpan × (collapses it needs) edges.
-constexpr double kDecimateSpan = 2;
 
 double angle_at(const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 u = b - a, v = c - a;
@@ -1579,86 +1579,158 @@ class Improver {
     return m;
   }
 
+  /// Greedy collapses in the order of the cost (quadric error, or edge length) from one heap:
+  /// an edge's entry holds its ends' versions; a collapse bumps the merged vertex's version and
+  /// pushes its edges with their new costs. An edge whose tests fail is dropped and waits for a
+  /// change next to it (a collapse at a neighbour of either end pushes it again). A sweep ends
+  /// when the heap is empty or kDecimateSweep of the triangles went, then flips reshape the
+  /// mesh and the next sweep starts from every edge. A sweep without a collapse lowers the
+  /// shape floor.
+  /// Serial and in a total order (cost, then the edge's key): deterministic.
   std::size_t decimate_in_order(std::size_t target, bool by_error) {
     static constexpr double kFloors[] = {kDecimateShapeFloorDeg, 10, 5, 2};
     std::size_t collapses = 0, floor = 0;
     if (by_error) init_quadrics();
-    bool whole = !by_error;  // this pass looks at every edge
-    for (int pass = 0; pass < 400; ++pass) {
-      const std::size_t have = alive_triangles();
-      if (have <= target) break;
-      const std::size_t need = (have - target + 1) / 2;
+    std::size_t have = alive_triangles();
+    struct Entry {
+      double cost;
+      std::uint64_t key;  // (smaller end << 32) | larger end
+      std::uint32_t va, vb;
+    };
+    auto later = [](const Entry& x, const Entry& y) {
+      return x.cost != y.cost ? x.cost > y.cost : x.key > y.key;
+    };
+    std::vector<std::uint32_t> ver(p_.size(), 0);
+    std::vector<std::uint8_t> marks(p_.size(), 0);  // commit_collapse's busy marks, not read here
+    std::vector<std::uint8_t> in_ring(p_.size(), 0);
+    std::vector<std::uint8_t> parked(p_.size(), 0);  // an edge of the vertex failed its tests
+    std::vector<Entry> heap;
+    std::vector<std::uint32_t> nbrs, ring;
+    std::size_t live = 0;  // heap entries after the last clean-up
+    Rings r;
+    auto entry = [&](std::uint32_t a, std::uint32_t b) {
+      if (a > b) std::swap(a, b);
+      return Entry{by_error ? collapse_cost(a, b) : distance(p_[a], p_[b]),
+                   (std::uint64_t{a} << 32) | b, ver[a], ver[b]};
+    };
+    // The interior edges of a (two triangles on it, opposite orientations) into the heap.
+    auto push_edges_of = [&](std::uint32_t a) {
+      neighbours(a, nbrs);
+      for (const std::uint32_t u : nbrs) {
+        if (in_ring[u] && u < a) continue;  // pushed from u
+        int fwd = 0, bwd = 0;
+        for (std::uint32_t i = inc_off_[a]; i < inc_end_[a]; ++i) {
+          const Tri& t = t_[inc_[i]];
+          for (int k = 0; k < 3; ++k) {
+            fwd += t[k] == a && t[(k + 1) % 3] == u;
+            bwd += t[k] == u && t[(k + 1) % 3] == a;
+          }
+        }
+        if (fwd != 1 || bwd != 1) continue;
+        heap.push_back(entry(a, u));
+        std::push_heap(heap.begin(), heap.end(), later);
+      }
+    };
+    // After b went into a: a's list is both lists' alive triangles (at the end of inc_), b's is
+    // empty, the two common neighbours lose the triangles that died.
+    auto relink = [&](std::uint32_t a, std::uint32_t b) {
+      const auto start = static_cast<std::uint32_t>(inc_.size());
+      for (const std::uint32_t v : {a, b})
+        for (std::uint32_t i = inc_off_[v]; i < inc_end_[v]; ++i)
+          if (tri_alive_[inc_[i]]) inc_.push_back(inc_[i]);
+      inc_off_[a] = start;
+      inc_end_[a] = static_cast<std::uint32_t>(inc_.size());
+      inc_end_[b] = inc_off_[b];
+      for (const std::uint32_t c : r.common) {
+        std::uint32_t w = inc_off_[c];
+        for (std::uint32_t i = inc_off_[c]; i < inc_end_[c]; ++i)
+          if (tri_alive_[inc_[i]]) inc_[w++] = inc_[i];
+        inc_end_[c] = w;
+      }
+    };
+    while (have > target && floor < std::size(kFloors)) {
       build_incidence();
       if (by_error) mark_near_border();
-      std::vector<std::pair<double, std::uint64_t>> edges;
+      heap.clear();
       for_each_interior_edge([&](std::uint32_t t1, std::uint8_t k1, std::uint32_t, std::uint8_t) {
-        const std::uint32_t a = t_[t1][k1], b = t_[t1][(k1 + 1) % 3];
-        edges.push_back(
-            {by_error ? collapse_cost(a, b) : distance(p_[a], p_[b]), (std::uint64_t{a} << 32) | b});
+        heap.push_back(entry(t_[t1][k1], t_[t1][(k1 + 1) % 3]));
       });
-      tbb::parallel_sort(edges.begin(), edges.end());  // distinct keys: a total order
-      // The collapse tests run in parallel on blocks of edges, on the pass's starting mesh, and
-      // the collapses are applied in order: a collapse marks its rings busy, so an edge with no
-      // busy end or common neighbour reads exactly the mesh the serial pass would (issue 14).
-      std::vector<std::uint8_t> busy(p_.size(), 0);
+      std::make_heap(heap.begin(), heap.end(), later);
+      live = heap.size();
+      std::fill(parked.begin(), parked.end(), 0);
       std::size_t done = 0;
-      struct Plan {
-        std::uint32_t a, b;
-        std::uint8_t ok;
+      // A sweep takes at most kDecimateSweep of the triangles: flips in between keep the
+      // neighbourhoods well shaped for the shape floor's tests.
+      const auto sweep = static_cast<std::size_t>(kDecimateSweep * static_cast<double>(have));
+      const std::size_t stop = std::max(target, have - sweep);
+      while (have > stop && !heap.empty()) {
+        std::pop_heap(heap.begin(), heap.end(), later);
+        const Entry e = heap.back();
+        heap.pop_back();
+        tick_.tick();
+        std::uint32_t a = static_cast<std::uint32_t>(e.key >> 32);
+        std::uint32_t b = static_cast<std::uint32_t>(e.key & 0xffffffffu);
+        if (ver[a] != e.va || ver[b] != e.vb || !collapse_ends(a, b)) continue;
         Vec3 q;
-      };
-      constexpr std::size_t kBlock = 256;
-      std::vector<Plan> plans(kBlock);
-      tbb::enumerable_thread_specific<Rings> rings;
-      Rings mine;
-      // Only the cheapest edges are candidates in a pass: walking on past the busy ones would
-      // collapse costly edges (a pass takes up to half the excess).
-      const std::size_t span =
-          whole ? edges.size()
-                : std::min(edges.size(), static_cast<std::size_t>(kDecimateSpan * need) + 1);
-      for (std::size_t e0 = 0; e0 < span && done < need; e0 += kBlock) {
-        const std::size_t e1 = std::min(span, e0 + kBlock);
-        parallel_ranges<std::size_t>(e0, e1, 16,
-                          [&](const tbb::blocked_range<std::size_t>& r) {
-                            Rings& local = rings.local();
-                            for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                              Plan& pl = plans[i - e0];
-                              pl.a = static_cast<std::uint32_t>(edges[i].second >> 32);
-                              pl.b = static_cast<std::uint32_t>(edges[i].second & 0xffffffffu);
-                              pl.ok = !busy[pl.a] && !busy[pl.b] && collapse_ends(pl.a, pl.b) &&
-                                      collapse_ok(pl.a, pl.b, false, kFloors[floor] * kDeg, pl.q,
-                                                  local);
-                            }
-                          });
-        for (std::size_t i = e0; i < e1 && done < need; ++i) {
-          tick_.tick();
-          const Plan& pl = plans[i - e0];
-          if (!pl.ok || busy[pl.a] || busy[pl.b]) continue;
-          neighbours(pl.a, mine.na);
-          neighbours(pl.b, mine.nb);
-          bool free = true;
-          for (auto c : mine.na)
-            if (busy[c] && std::binary_search(mine.nb.begin(), mine.nb.end(), c)) free = false;
-          if (!free) continue;
-          commit_collapse(pl.a, pl.b, pl.q, mine, busy);
-          if (by_error)
-            for (int k = 0; k < 10; ++k) quad_[pl.a][k] += quad_[pl.b][k];
-          ++done;
+        if (!collapse_ok(a, b, false, kFloors[floor] * kDeg, q, r)) {
+          parked[a] = parked[b] = 1;
+          continue;
+        }
+        commit_collapse(a, b, q, r, marks);
+        relink(a, b);
+        if (by_error) {
+          for (int k = 0; k < 10; ++k) quad_[a][k] += quad_[b][k];
+          // As mark_near_border() would now: a's triangles that touch a border vertex.
+          for (std::uint32_t i = inc_off_[a]; i < inc_end_[a]; ++i) {
+            const Tri& t = t_[inc_[i]];
+            bool touch = false;
+            for (auto v : t) touch |= boundary_[v] || fixed_[v];
+            if (!touch) continue;
+            for (auto v : t)
+              if (!near_border_[v]) near_border_[v] = 1, parked[v] = 1, ++ver[v];  // new costs
+          }
+        }
+        ++ver[b];
+        have -= 2;  // the link condition held: ab had two triangles
+        ++done;
+        // The moved lists grow inc_: compact it now and then.
+        if (inc_.size() > 8 * (inc_off_.size() + 16)) {
+          build_incidence();
+        }
+        // a's edges have new costs; the neighbours' rings changed, so did their edges' tests:
+        // those whose test failed (dropped, `parked`) go back into the heap (the others are
+        // still in it, at the same cost).
+        neighbours(a, nbrs);
+        ring.clear();
+        for (const std::uint32_t v : nbrs)
+          if (parked[v]) ring.push_back(v), parked[v] = 0;
+        ring.push_back(a);
+        ++ver[a];
+        for (const std::uint32_t v : ring) in_ring[v] = 1;
+        for (const std::uint32_t v : ring) push_edges_of(v);
+        for (const std::uint32_t v : ring) in_ring[v] = 0;
+        // Entries of bumped versions pile up: keep the heap within twice the live ones.
+        if (heap.size() > 2 * live + 1024) {
+          std::erase_if(heap, [&](const Entry& x) {
+            return ver[x.key >> 32] != x.va || ver[x.key & 0xffffffffu] != x.vb;
+          });
+          std::make_heap(heap.begin(), heap.end(), later);
+          live = heap.size();
         }
       }
       collapses += done;
-      if (done == 0 && !whole) {  // none of the cheapest: all of them next time
-        whole = true;
+      if (have <= target) break;
+      if (done == 0) {
+        if (floor == 0) decimate_stuck_at_ = have;
+        ++floor;
         continue;
       }
-      whole = !by_error;
-      if (done == 0 && floor == 0) decimate_stuck_at_ = have;
-      if (done == 0 && ++floor == std::size(kFloors)) break;
-      flip_pass();  // better-shaped neighbourhoods let more edges go in the next pass
+      flip_pass();  // better-shaped neighbourhoods let more edges go in the next sweep
     }
     decimate_floor_deg_ = kFloors[std::min(floor, std::size(kFloors) - 1)];
     std::vector<Quadric>().swap(quad_);
     std::vector<std::uint8_t>().swap(near_border_);
+    build_incidence();
     return collapses;
   }
 
