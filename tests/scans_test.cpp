@@ -195,7 +195,7 @@ TEST(ScanBounds, SpacingThatIsNotAFloatMeshesAsWell) {
     ASSERT_EQ(st.exit_code, 0) << st.err;
     const auto q = nlohmann::json::parse(st.out);
     pct[i++] = q["pct_min_angle_below"]["20"].get<double>();
-    EXPECT_GE(q["min_angle_deg"]["min"].get<double>(), 10.0) << spacing;  // 11.99° at both
+    EXPECT_GE(q["min_angle_deg"]["min"].get<double>(), 10.0) << spacing;  // 13.99° at both
     EXPECT_LT(pct[i - 1], 0.2) << spacing;                               // 0.05 % and 0.04 %
   }
   EXPECT_LT(std::abs(pct[0] - pct[1]), 0.1);

@@ -158,10 +158,25 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
     const Vec3 p = mesh.vertex(v);
     return P{p.x, p.y, p.z};
   };
-  // Boxes and the grid (chunked: the extent sums in a fixed order for any thread count).
-  std::vector<std::array<float, 6>> box(nt);
+  auto box_of = [&](std::size_t t) {
+    const auto v = tri(t);
+    Vec3 a = mesh.vertex(v[0]), b = a;
+    for (int i = 1; i < 3; ++i) {
+      const Vec3 p = mesh.vertex(v[i]);
+      for (int k = 0; k < 3; ++k) a[k] = std::min(a[k], p[k]), b[k] = std::max(b[k], p[k]);
+    }
+    std::array<float, 6> bx{};
+    for (int k = 0; k < 3; ++k) bx[k] = static_cast<float>(a[k]), bx[k + 3] = static_cast<float>(b[k]);
+    return bx;
+  };
+  // The grid: over every triangle's box, or with `involved` over the involved triangles' boxes
+  // (a pair with an involved triangle overlaps inside its box) — each pair is tested in the one
+  // cell holding its boxes' overlap's low corner, so the pairs found do not depend on the grid,
+  // and a query about a few triangles costs one pass over the mesh's vertices, not a grid of it.
+  // Chunked: the extent sums in a fixed order for any thread count.
   struct Extent {
     double sum = 0;
+    std::size_t count = 0;
     Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
   };
   const Extent ext = detail::with_threads(context, [&] {
@@ -170,33 +185,30 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
         [&](std::size_t t0, std::size_t t1) {
           Extent e;
           for (std::size_t t = t0; t < t1; ++t) {
-            const auto v = tri(t);
-            Vec3 a = mesh.vertex(v[0]), b = a;
-            for (int i = 1; i < 3; ++i) {
-              const Vec3 p = mesh.vertex(v[i]);
-              for (int k = 0; k < 3; ++k) a[k] = std::min(a[k], p[k]), b[k] = std::max(b[k], p[k]);
-            }
+            if (involved && !(*involved)[t]) continue;
+            const auto b = box_of(t);
+            ++e.count;
             for (int k = 0; k < 3; ++k) {
-              box[t][k] = static_cast<float>(a[k]);
-              box[t][k + 3] = static_cast<float>(b[k]);
-              e.sum += b[k] - a[k];
-              e.lo[k] = std::min(e.lo[k], a[k]);
-              e.hi[k] = std::max(e.hi[k], b[k]);
+              e.sum += static_cast<double>(b[k + 3]) - static_cast<double>(b[k]);
+              e.lo[k] = std::min(e.lo[k], static_cast<double>(b[k]));
+              e.hi[k] = std::max(e.hi[k], static_cast<double>(b[k + 3]));
             }
           }
           return e;
         },
         [](Extent acc, const Extent& e) {
           acc.sum += e.sum;
+          acc.count += e.count;
           for (int k = 0; k < 3; ++k)
             acc.lo[k] = std::min(acc.lo[k], e.lo[k]), acc.hi[k] = std::max(acc.hi[k], e.hi[k]);
           return acc;
         });
   });
+  if (ext.count == 0) return PairList{};
   const double extent = ext.sum;
   const Vec3 lo = ext.lo, hi = ext.hi;
   const Box all{lo, hi};
-  const double cell_size = std::max(2 * extent / (3 * static_cast<double>(nt)), 1e-30);
+  const double cell_size = std::max(2 * extent / (3 * static_cast<double>(ext.count)), 1e-30);
   std::array<std::int64_t, 3> dims{};
   for (int k = 0; k < 3; ++k)
     dims[k] = std::clamp<std::int64_t>(
@@ -205,8 +217,7 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
     const double c = (x - all.lo[k]) / (all.hi[k] - all.lo[k] + 1e-300) * static_cast<double>(dims[k]);
     return std::clamp<std::int64_t>(static_cast<std::int64_t>(c), 0, dims[k] - 1);
   };
-  auto for_each_cell = [&](std::size_t t, auto&& f) {
-    const auto& b = box[t];
+  auto for_each_cell_of_box = [&](const std::array<float, 6>& b, auto&& f) {
     const std::int64_t x0 = cell_of(b[0], 0), x1 = cell_of(b[3], 0), y0 = cell_of(b[1], 1),
                        y1 = cell_of(b[4], 1), z0 = cell_of(b[2], 2), z1 = cell_of(b[5], 2);
     for (std::int64_t z = z0; z <= z1; ++z)
@@ -225,12 +236,14 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
     return use_bits ? (bits[c >> 6] >> (c & 63) & 1) != 0
                     : std::binary_search(active.begin(), active.end(), c);
   };
+  // Candidates (ascending) and their boxes: box[i] is the box of triangle candidates[i].
   std::vector<std::uint32_t> candidates;
+  std::vector<std::array<float, 6>> box;
   if (involved) {
     if (use_bits) bits.assign((grid_cells + 63) / 64, 0);
     for (std::size_t t = 0; t < nt; ++t)
       if ((*involved)[t])
-        for_each_cell(t, [&](std::uint64_t c) {
+        for_each_cell_of_box(box_of(t), [&](std::uint64_t c) {
           if (use_bits) bits[c >> 6] |= std::uint64_t{1} << (c & 63);
           else active.push_back(c);
           return false;
@@ -243,7 +256,12 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
         if (context.cancelled()) return;
         for (std::size_t t = t0; t < t1; ++t) {
           bool h = (*involved)[t] != 0;
-          if (!h) for_each_cell(t, [&](std::uint64_t c) { return h = is_active(c); });
+          if (!h) {
+            const auto b = box_of(t);
+            bool near = true;  // within the involved triangles' extent
+            for (int k = 0; k < 3; ++k) near &= b[k] <= all.hi[k] && all.lo[k] <= b[k + 3];
+            if (near) for_each_cell_of_box(b, [&](std::uint64_t c) { return h = is_active(c); });
+          }
           hit[t] = h;
         }
       });
@@ -254,6 +272,13 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
     candidates.resize(nt);
     for (std::size_t t = 0; t < nt; ++t) candidates[t] = static_cast<std::uint32_t>(t);
   }
+  box.resize(candidates.size());
+  detail::with_threads(context, [&] {
+    detail::for_chunks(candidates.size(), [&](std::size_t i0, std::size_t i1) {
+      for (std::size_t i = i0; i < i1; ++i) box[i] = box_of(candidates[i]);
+    });
+  });
+  auto for_each_cell = [&](std::uint32_t i, auto&& f) { for_each_cell_of_box(box[i], f); };
   // Duplicate triangles (same vertex set) are listed once: they are a topology finding, and a
   // pile of copies would make the pair tests quadratic. Copies share their box, so a candidate's
   // copies are candidates too.
@@ -264,7 +289,7 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
     for (std::size_t i = 0; i < candidates.size(); ++i) {
       auto k = tri(candidates[i]);
       std::sort(k.begin(), k.end());
-      keys[i] = {k, candidates[i]};
+      keys[i] = {k, static_cast<std::uint32_t>(i)};  // candidates ascend: the same order
     }
     tbb::parallel_sort(keys.begin(), keys.end());  // distinct (index): a total order
     for (std::size_t i = 0; i < keys.size(); ++i)
@@ -306,9 +331,10 @@ std::optional<PairList> find_pairs(const Mesh& mesh, const std::vector<std::uint
                            cz = static_cast<std::int64_t>(id / (dims[0] * dims[1]));
         for (std::size_t i = starts[c]; i < starts[c + 1]; ++i)
           for (std::size_t j = i + 1; j < starts[c + 1]; ++j) {
-            const std::uint32_t a = entries[i].second, b = entries[j].second;
+            const std::uint32_t ia = entries[i].second, ib = entries[j].second;
+            const std::uint32_t a = candidates[ia], b = candidates[ib];
             if (involved && !(*involved)[a] && !(*involved)[b]) continue;
-            const auto &ba = box[a], &bb = box[b];
+            const auto &ba = box[ia], &bb = box[ib];
             float lo[3];
             bool overlap = true;
             for (int k = 0; k < 3; ++k) {
