@@ -369,10 +369,35 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
   if (before) {  // nullopt: not measured (piles of triangles)
     st.intersections_before = before->size();
     st.intersections_after = before->size();
+    // After the first round only the triangles whose vertices went back can gain or lose a
+    // pair: the other pairs stay, and the query asks about those triangles alone (each is an
+    // involved one, so the pairs found are the ones the full query would add).
+    std::optional<PairList> now = intersecting_pairs_involving(mesh, involved, context);
+    std::vector<Vec3> prev;
     for (int round = 0; round < 20; ++round) {
-      const std::optional<PairList> now = intersecting_pairs_involving(mesh, involved, context);
+      if (round > 0) {
+        std::vector<std::uint8_t> changed(nt, 0);
+        std::size_t n_changed = 0;
+        for (std::size_t t = 0; t < nt; ++t) {
+          for (auto v : tri(t)) changed[t] |= p[v] != prev[v] ? 1 : 0;
+          n_changed += changed[t];
+        }
+        if (n_changed > 0) {
+          const std::optional<PairList> near = intersecting_pairs_involving(mesh, changed, context);
+          if (!near) break;
+          PairList merged;
+          for (const auto& pr : *now)
+            if (!changed[pr.first] && !changed[pr.second]) merged.push_back(pr);
+          const std::size_t mid = merged.size();
+          merged.insert(merged.end(), near->begin(), near->end());
+          std::inplace_merge(merged.begin(), merged.begin() + static_cast<std::ptrdiff_t>(mid),
+                             merged.end());
+          now = std::move(merged);
+        }
+      }
       if (!now) break;
       st.intersections_after = now->size();
+      prev = p;
       PairList added;  // both lists are sorted
       std::set_difference(now->begin(), now->end(), before->begin(), before->end(),
                           std::back_inserter(added));
