@@ -1272,9 +1272,13 @@ class Improver {
     for (std::size_t i = 0; i < from.size(); ++i) slot[from[i].first] = static_cast<std::int32_t>(i);
     std::vector<std::uint8_t> undone(from.size(), 0);
     std::size_t count = 0;
+    // After the first count only the triangles around the vertices sent back change: the other
+    // pairs stay, and the next count asks about those triangles alone (all of them involved).
+    std::optional<PairList> after = intersecting_pairs_involving(m, involved, ctx_);
+    std::vector<std::uint8_t> changed(m.num_triangles(), 0);
     for (int iter = 0; iter < 32; ++iter) {
-      const std::optional<PairList> after = intersecting_pairs_involving(m, involved, ctx_);
       if (!after) break;
+      std::fill(changed.begin(), changed.end(), 0);
       bool any = false;
       for (const auto& pr : *after) {
         if (std::binary_search(before->begin(), before->end(), pr)) continue;
@@ -1284,11 +1288,22 @@ class Improver {
               undone[slot[v]] = 1;
               set(v, from[slot[v]].second);
               mark_ring_dirty(v);
+              for (std::uint32_t k = inc_off_[v]; k < inc_end_[v]; ++k) changed[tri_of[inc_[k]]] = 1;
               ++count;
               any = true;
             }
       }
       if (!any) break;
+      const std::optional<PairList> near = intersecting_pairs_involving(m, changed, ctx_);
+      if (!near) break;
+      PairList merged;
+      for (const auto& pr : *after)
+        if (!changed[pr.first] && !changed[pr.second]) merged.push_back(pr);
+      const std::size_t mid = merged.size();
+      merged.insert(merged.end(), near->begin(), near->end());
+      std::inplace_merge(merged.begin(), merged.begin() + static_cast<std::ptrdiff_t>(mid),
+                         merged.end());
+      after = std::move(merged);
     }
     return count;
   }
