@@ -401,6 +401,42 @@ TEST(HierarchyCli, LevelFitsAgainstTheVolume) {
   EXPECT_FALSE(std::filesystem::exists(tmp.file("x.ply")));
 }
 
+// `level --fit-finest`: the same fit without the volume, against the hierarchy's finest mesh.
+// On the CT head (default hierarchy, 57k triangles at its finest), a 20k cut: RMS against the
+// volume 0.439 unfitted, 0.339 fitted to the volume, 0.342 fitted to the finest mesh.
+TEST(HierarchyCli, LevelFitsAgainstTheFinestMeshWithoutTheVolume) {
+  TempDir tmp;
+  const std::string head = source_dir() + "/data/ct_headsq/quarter.nhdr";
+  ASSERT_EQ(run_cli("extract " + head + " --iso 500.5 --quiet -o " + tmp.file("a.ply") +
+                    " --hierarchy " + tmp.file("a.amh")).exit_code, 0);
+  const std::string cut = "level " + tmp.file("a.amh") + " --triangles 20000 --quiet -o ";
+  ASSERT_EQ(run_cli(cut + tmp.file("s.ply")).exit_code, 0);
+  auto r = run_cli(cut + tmp.file("v.ply") + " --fit " + head);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_cli(cut + tmp.file("f.ply") + " --fit-finest");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  auto rms = [&](const std::string& mesh) {
+    const auto s = run_cli("stats " + mesh + " --field " + head + " --iso 500.5 --json");
+    EXPECT_EQ(s.exit_code, 0) << s.err;
+    return nlohmann::json::parse(s.out)["distance"]["rms"].get<double>();
+  };
+  const double on = rms(tmp.file("s.ply")), vol = rms(tmp.file("v.ply")), fin = rms(tmp.file("f.ply"));
+  EXPECT_LT(fin, 0.85 * on) << on << " " << fin;
+  EXPECT_LT(fin, 1.1 * vol) << vol << " " << fin;
+  const Mesh s = read_mesh(tmp.file("s.ply")), f = read_mesh(tmp.file("f.ply"));
+  EXPECT_EQ(f.triangles, s.triangles);
+  EXPECT_NE(f.positions, s.positions);
+  const auto st = run_cli("stats " + tmp.file("f.ply") + " --json");
+  const auto ss = run_cli("stats " + tmp.file("s.ply") + " --json");
+  EXPECT_LE(nlohmann::json::parse(st.out)["self_intersecting_pairs"].get<int>(),
+            nlohmann::json::parse(ss.out)["self_intersecting_pairs"].get<int>());
+  // Both fits at once: refused.
+  const auto both = run_cli(cut + tmp.file("x.ply") + " --fit " + head + " --fit-finest");
+  EXPECT_EQ(both.exit_code, 1);
+  EXPECT_NE(both.err.find("not both"), std::string::npos) << both.err;
+  EXPECT_FALSE(std::filesystem::exists(tmp.file("x.ply")));
+}
+
 TEST(HierarchyCli, Errors) {
   TempDir tmp;
   write_bytes(tmp.file("bad.amh"), "ADAMHIER and then nothing sensible");

@@ -472,6 +472,47 @@ TEST(Hausdorff, BvhClosestMatchesBruteForce) {
   }
 }
 
+// make_mesh_distance_field: signed distance to a sphere mesh, at points around it (inside and
+// out, near and far, on vertices, edges and faces), against the exact distance to the sphere it
+// approximates; the gradient is the unit radial direction; a Newton step lands on the mesh.
+TEST(MeshDistanceField, SignedDistanceToASphereMesh) {
+  const Vec3 c{0.3, -0.2, 0.1};
+  const double r = 1.2;
+  const Mesh m = icosphere(5, r, c);  // chord error about 5e-4 r
+  const Box domain{{-2, -2, -2}, {2, 2, 2}};
+  const std::unique_ptr<ScalarField> f = make_mesh_distance_field(m, domain);
+  EXPECT_EQ(f->domain().lo, domain.lo);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1), radius(0.2 * r, 1.8 * r);
+  for (int k = 0; k < 500; ++k) {
+    const Vec3 d = normalized(Vec3{u(rng), u(rng), u(rng)});
+    const double rr = k < 100 ? r : radius(rng);  // the first ones on the sphere itself
+    const Vec3 p = c + rr * d;
+    EXPECT_NEAR(f->value(p), rr - r, 1e-3 * r) << k;
+    const Vec3 g = f->gradient(p);
+    EXPECT_NEAR(norm(g), 1, 1e-9) << k;
+    if (std::abs(rr - r) > 0.05) EXPECT_GT(dot(g, d), 0.99) << k;
+    // Newton: p − f ∇f lands on the mesh.
+    const Vec3 q = p - f->value(p) * g;
+    EXPECT_NEAR(f->value(q), 0, 1e-9) << k;
+  }
+  // On the mesh's own vertices and edge midpoints: zero, gradient along the outward normal.
+  for (std::size_t t = 0; t < 50; ++t) {
+    const Vec3 a = m.vertex(m.triangles[3 * t]), b = m.vertex(m.triangles[3 * t + 1]);
+    for (const Vec3& p : {a, 0.5 * (a + b)}) {
+      EXPECT_NEAR(f->value(p), 0, 1e-12);
+      EXPECT_GT(dot(f->gradient(p), normalized(p - c)), 0.99);
+    }
+  }
+  // Inward-facing triangles flip the sign: inside is then positive.
+  const std::unique_ptr<ScalarField> g = make_mesh_distance_field(flipped(m), domain);
+  EXPECT_NEAR(g->value(c), r, 1e-3 * r);
+  // No triangles: zero, no gradient.
+  const std::unique_ptr<ScalarField> none = make_mesh_distance_field(Mesh{}, domain);
+  EXPECT_EQ(none->value(c), 0);
+  EXPECT_EQ(norm(none->gradient(c)), 0);
+}
+
 // --------------------------------------------------------------------- determinism
 
 TEST(Determinism, SameNumbersWithOneAndTwoThreads) {

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "adamesh/error.h"
+#include "adamesh/extract.h"
 #include "adamesh/improve.h"
 #include "adamesh/input.h"
 #include "adamesh/io.h"
@@ -38,6 +39,9 @@ std::vector<OptionSpec> level_specs() {
                        "least-squares vertex offsets along the normals against the volume INPUT "
                        "the hierarchy was made from (what extract writes by default; "
                        "docs/QUALITY.md \"Fit\"); input options as for extract"},
+                      {"--fit-finest", false,
+                       "the same fit without the volume: against the hierarchy's finest mesh "
+                       "(every split), which stands for the surface"},
                       {"--ascii", false, "ASCII PLY instead of binary"},
                       {"--quiet", false, "no summary line"},
                       compress_option_spec(),
@@ -52,7 +56,7 @@ int cmd_level(const Argv& argv) {
   const Args args("level", argv, level_specs());
   if (args.help_requested()) {
     std::cout << args.usage("FILE.amh (--level K | --max-error E | --triangles N | --all) "
-                            "-o mesh.ply|- [--format F] [--fit INPUT]")
+                            "-o mesh.ply|- [--format F] [--fit INPUT | --fit-finest]")
               << "\n-o - --format ply writes the mesh to standard output (ply obj off stl glb; "
                  "binary formats\nare refused on a terminal); the summary then goes to stderr.\n";
     return 0;
@@ -102,6 +106,14 @@ int cmd_level(const Argv& argv) {
     improve_mesh(cut.mesh, cut.vertex_border, nullptr, h.iso, io, &map);
     cut.vertex_border = remap_vertex_flags(cut.vertex_border, map, cut.mesh.num_vertices());  // for --fit
     what += ", improved";
+  }
+  if (args.has("--fit") && args.has("--fit-finest"))
+    fail(Status::usage, "adamesh level: give --fit INPUT or --fit-finest, not both");
+  if (args.has("--fit-finest")) {
+    const FitStats st = fit_cut_to_finest(cut, h);
+    std::ostringstream w;
+    w << ", fitted to the finest mesh: RMS distance to it " << st.rms_before << " -> " << st.rms_after;
+    what += w.str();
   }
   if (const auto spec = args.get("--fit")) {
     const Input in = load_input(*spec, input_options_from(args));

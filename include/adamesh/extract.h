@@ -149,6 +149,13 @@ ExtractResult extract(const Input& input, const ExtractOptions& options = {});
 ExtractResult extract(const std::string& spec, const ExtractOptions& options = {},
                       const InputOptions& input_options = {});
 
+/// Least-squares vertex offsets (fit_least_squares) for a cut of `h` without the volume: the
+/// hierarchy's finest mesh (extract_all) stands for the iso-surface, as a signed distance field
+/// (make_mesh_distance_field); the cut's border vertices stay, moves are clamped into h.bounds.
+/// `adamesh level --fit-finest`, Python `Hierarchy.cut(..., fit=True)`; docs/QUALITY.md "Fit".
+FitStats fit_cut_to_finest(CutMesh& cut, const Hierarchy& h,
+                           const ExecutionContext& context = default_context());
+
 /// The report as the JSON object `adamesh extract --report` writes (2-space indent, newline).
 std::string report_json(const ExtractReport& report);
 

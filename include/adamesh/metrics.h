@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -165,6 +166,14 @@ struct HausdorffReport {
 /// symmetric Hausdorff distance. A mesh without triangles is at infinite distance.
 HausdorffReport hausdorff(const Mesh& a, const Mesh& b, const HausdorffOptions& options = {},
                           const ExecutionContext& context = default_context());
+
+/// `mesh` as a scalar field: the signed distance to its closest triangle (exact, through a BVH),
+/// positive on the side its triangles' normals face (the vertices' area-weighted normals
+/// interpolated at the closest point give the side there); the gradient is the unit direction
+/// away from the closest point, so iso 0 is the mesh itself and a Newton step lands on it.
+/// domain() is `domain`. value() and gradient() may be called concurrently. What `adamesh level
+/// --fit-finest` fits a cut against: the hierarchy's finest mesh stands for the volume.
+std::unique_ptr<ScalarField> make_mesh_distance_field(Mesh mesh, const Box& domain);
 
 // ---------------------------------------------------------------------- self-intersections
 

@@ -316,12 +316,14 @@ class Hierarchy:
         self._h = _h
 
     def cut(self, *, triangles: Optional[int] = None, level: Optional[int] = None,
-            max_error: Optional[float] = None, splits: Optional[int] = None) -> Mesh:
+            max_error: Optional[float] = None, splits: Optional[int] = None,
+            fit: bool = False) -> Mesh:
         """One of: ``triangles`` (the largest prefix with at most that many), ``level`` (uniform
         level M_level), ``max_error`` (every triangle within that distance, world units),
-        ``splits`` (the first N splits)."""
+        ``splits`` (the first N splits). ``fit``: least-squares vertex offsets against the
+        hierarchy's finest mesh, without the volume (``adamesh level --fit-finest``)."""
         return Mesh(_mesh=self._h.cut(triangles=triangles, level=level, max_error=max_error,
-                                      splits=splits))
+                                      splits=splits, fit=bool(fit)))
 
     def save(self, path: PathLike) -> None:
         """Writes the ``.amh`` file (the bytes ``adamesh extract --hierarchy`` writes)."""

@@ -248,22 +248,20 @@ struct PyHierarchy {
 };
 
 PyMesh cut(const PyHierarchy& self, std::optional<std::size_t> triangles, std::optional<int> level,
-           std::optional<double> max_error, std::optional<std::size_t> splits) {
+           std::optional<double> max_error, std::optional<std::size_t> splits, bool fit) {
   const int given = triangles.has_value() + level.has_value() + max_error.has_value() +
                     splits.has_value();
   if (given != 1)
     throw Error(Status::usage, "cut: give exactly one of triangles=, level=, max_error=, splits=");
+  if (level && (*level < 0 || *level > 60)) throw Error(Status::usage, "cut: level must be 0..60");
+  if (max_error && !(*max_error >= 0)) throw Error(Status::usage, "cut: max_error must be >= 0");
   py::gil_scoped_release nogil;
-  if (triangles) return {extract_triangles(self.h, *triangles).mesh};
-  if (level) {
-    if (*level < 0 || *level > 60) throw Error(Status::usage, "cut: level must be 0..60");
-    return {extract_level(self.h, *level).mesh};
-  }
-  if (max_error) {
-    if (!(*max_error >= 0)) throw Error(Status::usage, "cut: max_error must be >= 0");
-    return {extract_max_error(self.h, *max_error).mesh};
-  }
-  return {extract_prefix(self.h, std::min(*splits, self.h.splits.size())).mesh};
+  CutMesh c = triangles   ? extract_triangles(self.h, *triangles)
+              : level     ? extract_level(self.h, *level)
+              : max_error ? extract_max_error(self.h, *max_error)
+                          : extract_prefix(self.h, std::min(*splits, self.h.splits.size()));
+  if (fit) fit_cut_to_finest(c, self.h);
+  return {std::move(c.mesh)};
 }
 
 // ------------------------------------------------------------------------------- extract
@@ -563,7 +561,8 @@ PYBIND11_MODULE(_adamesh, m) {
 
   py::class_<PyHierarchy>(m, "_Hierarchy")
       .def("cut", &cut, py::arg("triangles") = py::none(), py::arg("level") = py::none(),
-           py::arg("max_error") = py::none(), py::arg("splits") = py::none())
+           py::arg("max_error") = py::none(), py::arg("splits") = py::none(),
+           py::arg("fit") = false)
       .def("save",
            [](const PyHierarchy& h, const std::string& path) {
              py::gil_scoped_release nogil;

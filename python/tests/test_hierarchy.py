@@ -40,6 +40,22 @@ def test_triangle_and_error_cuts_are_nested_and_monotone():
         h.cut(triangles=10, level=1)
 
 
+def test_cut_fitted_to_the_finest_mesh_without_the_volume(tmp_path):
+    r = adamesh.extract(HEAD, 500.5)  # the default hierarchy: 57k triangles at its finest
+    h = r.hierarchy
+    plain, fitted = h.cut(triangles=20000), h.cut(triangles=20000, fit=True)
+    np.testing.assert_array_equal(fitted.faces, plain.faces)
+    assert not np.array_equal(fitted.vertices, plain.vertices)
+    rms = [adamesh.stats(m, field=HEAD, iso=500.5)["distance"]["rms"] for m in (plain, fitted)]
+    assert rms[1] < 0.85 * rms[0], rms
+    # The same bytes as the CLI's `level --fit-finest`.
+    h.save(tmp_path / "h.amh")
+    run_cli("level", tmp_path / "h.amh", "--triangles", 20000, "--fit-finest", "--quiet",
+            "-o", tmp_path / "cli.ply")
+    fitted.save(tmp_path / "py.ply")
+    assert read_bytes(tmp_path / "py.ply") == read_bytes(tmp_path / "cli.ply")
+
+
 def test_amh_round_trip_and_cli_bytes(tmp_path):
     run_cli("extract", HEAD, "--iso", 500.5, "--triangles", 8000, "--quiet",
             "--hierarchy", tmp_path / "cli.amh")

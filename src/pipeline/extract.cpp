@@ -429,4 +429,14 @@ ExtractResult extract(const std::string& spec, const ExtractOptions& options,
   });
 }
 
+FitStats fit_cut_to_finest(CutMesh& cut, const Hierarchy& h, const ExecutionContext& context) {
+  if (cut.mesh.num_triangles() == 0) return {};
+  const std::unique_ptr<ScalarField> surface =
+      make_mesh_distance_field(extract_all(h).mesh, h.bounds);
+  FitOptions fo;
+  fo.max_step = 0.25 * h.voxel;  // as extract's fit
+  fo.box = h.bounds;
+  return fit_least_squares(cut.mesh, cut.vertex_border, *surface, 0.0, fo, context);
+}
+
 }  // namespace adamesh
