@@ -200,6 +200,14 @@ std::optional<std::vector<std::pair<std::uint32_t, std::uint32_t>>> intersecting
     const Mesh& mesh, const std::vector<std::uint8_t>& involved,
     const ExecutionContext& context = default_context());
 
+/// A pair list (sorted) after the triangles flagged in `changed` moved: the pairs without a
+/// changed triangle stay, the others are replaced by `near` = intersecting_pairs_involving(mesh,
+/// changed). Sorted, the same list a full recount would give.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs_after_change(
+    const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
+    const std::vector<std::uint8_t>& changed,
+    const std::vector<std::pair<std::uint32_t, std::uint32_t>>& near);
+
 // ---------------------------------------------------------------------- reports
 
 /// Everything `adamesh stats` prints.

@@ -409,4 +409,17 @@ std::optional<std::vector<std::pair<std::uint32_t, std::uint32_t>>> intersecting
   return find_pairs(mesh, &involved, context);
 }
 
+std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs_after_change(
+    const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
+    const std::vector<std::uint8_t>& changed,
+    const std::vector<std::pair<std::uint32_t, std::uint32_t>>& near) {
+  PairList merged;
+  for (const auto& pr : pairs)
+    if (!changed[pr.first] && !changed[pr.second]) merged.push_back(pr);
+  const std::size_t kept = merged.size();
+  merged.insert(merged.end(), near.begin(), near.end());
+  std::inplace_merge(merged.begin(), merged.begin() + static_cast<std::ptrdiff_t>(kept), merged.end());
+  return merged;
+}
+
 }  // namespace adamesh

@@ -385,14 +385,7 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
         if (n_changed > 0) {
           const std::optional<PairList> near = intersecting_pairs_involving(mesh, changed, context);
           if (!near) break;
-          PairList merged;
-          for (const auto& pr : *now)
-            if (!changed[pr.first] && !changed[pr.second]) merged.push_back(pr);
-          const std::size_t mid = merged.size();
-          merged.insert(merged.end(), near->begin(), near->end());
-          std::inplace_merge(merged.begin(), merged.begin() + static_cast<std::ptrdiff_t>(mid),
-                             merged.end());
-          now = std::move(merged);
+          now = pairs_after_change(*now, changed, *near);
         }
       }
       if (!now) break;

@@ -629,14 +629,7 @@ class Improver {
       for (const auto& mv : moves) moved[mv.first] = 0;
       std::optional<PairList> near = intersecting_pairs_involving(m, involved, ctx_);
       PairList next;
-      if (near) {
-        for (const auto& pr : pairs)
-          if (!involved[pr.first] && !involved[pr.second]) next.push_back(pr);
-        const std::size_t kept = next.size();
-        next.insert(next.end(), near->begin(), near->end());
-        std::inplace_merge(next.begin(), next.begin() + static_cast<std::ptrdiff_t>(kept),
-                           next.end());
-      }
+      if (near) next = pairs_after_change(pairs, involved, *near);
       if (near && next.size() < cur) {
         // Rounds that remove under 1 % of the pairs move the same stuck vertices again and
         // again (the frog: 48 rounds over 300k pairs, the last 30 removing 0.1–1 % each, a
@@ -1296,14 +1289,7 @@ class Improver {
       if (!any) break;
       const std::optional<PairList> near = intersecting_pairs_involving(m, changed, ctx_);
       if (!near) break;
-      PairList merged;
-      for (const auto& pr : *after)
-        if (!changed[pr.first] && !changed[pr.second]) merged.push_back(pr);
-      const std::size_t mid = merged.size();
-      merged.insert(merged.end(), near->begin(), near->end());
-      std::inplace_merge(merged.begin(), merged.begin() + static_cast<std::ptrdiff_t>(mid),
-                         merged.end());
-      after = std::move(merged);
+      after = pairs_after_change(*after, changed, *near);
     }
     return count;
   }
