@@ -174,6 +174,11 @@ TEST(Extract, SameScanMeshForAnyThreadCount) {
     EXPECT_GT(a.report.improve.flips + a.report.improve.moves, 0u) << triangles;
     if (triangles == 3000) EXPECT_GT(a.report.base_improve.decimated, 0u);
     else EXPECT_GT(a.report.improve.intersections_before, 0u);
+    // The separation ran last: its count is the written mesh's, and it never adds a pair.
+    ASSERT_TRUE(a.report.separate.has_value());
+    EXPECT_LE(a.report.separate->intersections_after, a.report.separate->intersections_before);
+    EXPECT_EQ(static_cast<std::int64_t>(a.report.separate->intersections_after),
+              self_intersections(a.mesh).pairs);
   }
 }
 

@@ -338,5 +338,89 @@ TEST(Improve, UntangleRemovesAFoldAndKeepsTopology) {
   EXPECT_EQ(plain.intersections_before, 0u);  // not measured
 }
 
+/// A flat 8×8 grid at z = 0 whose centre vertex is raised to `lift`, and a small square sheet
+/// (two triangles) at z = 0.1 over the centre: the raised vertex's triangles poke through it.
+Mesh poked_sheet(double lift) {
+  Mesh m = sheared_grid(8, 0.0);
+  const std::uint32_t centre = 4 * 9 + 4;
+  m.positions[3 * centre + 2] = static_cast<float>(lift);
+  const std::uint32_t a = m.add_vertex({3.6, 3.6, 0.1}), b = m.add_vertex({4.4, 3.6, 0.1}),
+                      c = m.add_vertex({4.4, 4.4, 0.1}), d = m.add_vertex({3.6, 4.4, 0.1});
+  m.add_triangle(a, b, c);
+  m.add_triangle(a, c, d);
+  return m;
+}
+
+TEST(Separate, PushesAPokingVertexBackAcrossThePlane) {
+  Mesh m = poked_sheet(0.15);
+  const Mesh before = m;
+  ASSERT_GT(self_intersections(m).pairs, 0);
+  std::vector<std::uint8_t> fixed(m.num_vertices(), 0);
+  SeparateOptions o;
+  o.voxel = 1;
+  const SeparateStats st = separate_crossings(m, fixed, o);
+  EXPECT_GT(st.intersections_before, 0u);
+  EXPECT_EQ(st.intersections_after, 0u);
+  EXPECT_EQ(self_intersections(m).pairs, 0);
+  EXPECT_EQ(st.moved, 1u);  // the centre, just below the sheet's plane
+  const std::uint32_t centre = 4 * 9 + 4;
+  EXPECT_LT(m.positions[3 * centre + 2], 0.1f);
+  EXPECT_GT(m.positions[3 * centre + 2], 0.09f);
+  EXPECT_NEAR(st.max_move, 0.05 + 1e-3, 1e-6);
+  for (std::size_t v = 0; v < m.num_vertices(); ++v)
+    if (v != centre)
+      for (int k = 0; k < 3; ++k) EXPECT_EQ(m.positions[3 * v + k], before.positions[3 * v + k]);
+  EXPECT_EQ(m.triangles, before.triangles);
+  EXPECT_GE(min_angle_deg(m), std::min(20.0, min_angle_deg(before)));
+  // The same for any thread count.
+  Mesh again = poked_sheet(0.15);
+  ExecutionContext one;
+  one.threads = 1;
+  separate_crossings(again, fixed, o, one);
+  EXPECT_EQ(again.positions, m.positions);
+}
+
+TEST(Separate, FixedVerticesReachAndTheBoxHold) {
+  const std::uint32_t centre = 4 * 9 + 4;
+  // The centre fixed (the sheet's vertices are on the mesh's boundary): it stays, and what
+  // separates the pair is the next option, its neighbours lifted over the sheet.
+  {
+    Mesh m = poked_sheet(0.15);
+    std::vector<std::uint8_t> fixed(m.num_vertices(), 0);
+    fixed[centre] = 1;
+    const Mesh before = m;
+    const SeparateStats st = separate_crossings(m, fixed, SeparateOptions{});
+    EXPECT_EQ(m.vertex(centre), before.vertex(centre));
+    EXPECT_EQ(st.intersections_after, static_cast<std::size_t>(self_intersections(m).pairs));
+    EXPECT_LE(st.max_move, 0.5 + 1e-9);
+  }
+  // Every push longer than the reach (half of a 0.01 voxel): nothing moves.
+  {
+    Mesh m = poked_sheet(0.15);
+    SeparateOptions o;
+    o.voxel = 0.01;
+    const Mesh before = m;
+    const SeparateStats st = separate_crossings(m, {}, o);
+    EXPECT_GT(st.intersections_after, 0u);
+    EXPECT_EQ(st.intersections_after, st.intersections_before);
+    EXPECT_EQ(m.positions, before.positions);
+  }
+  // A box the cheapest push would leave (the centre to z = 0.099): no vertex moves out of it.
+  {
+    Mesh m = poked_sheet(0.15);
+    SeparateOptions o;
+    o.box = Box{{-1, -1, 0.0995}, {9, 9, 1}};
+    const Mesh before = m;
+    separate_crossings(m, {}, o);
+    EXPECT_GE(m.positions[3 * centre + 2], 0.0995f);
+    for (std::size_t v = 0; v < m.num_vertices(); ++v)
+      if (m.vertex(v) != before.vertex(v)) EXPECT_GE(m.positions[3 * v + 2], 0.0995f) << v;
+  }
+  SeparateOptions bad;
+  bad.voxel = 0;
+  Mesh m = poked_sheet(0.15);
+  EXPECT_THROW(separate_crossings(m, {}, bad), Error);
+}
+
 }  // namespace
 }  // namespace adamesh

@@ -622,6 +622,17 @@ TEST(LevelImprove, KeepsCountAndTopologyAndRemovesSlivers) {
   const double before = pct(tmp.file("a.ply")), after = pct(tmp.file("b.ply"));
   EXPECT_GT(before, 3.0);
   EXPECT_LT(after, 1.0);
+  // The separation ran last and says how many intersecting pairs it left: the mesh's count.
+  const auto said = run_cli("level " + tmp.file("h.amh") + " --triangles 30000 --improve -o " +
+                            tmp.file("c.ply"));
+  const auto at = said.out.find("intersecting triangle pairs ");
+  ASSERT_NE(at, std::string::npos) << said.out;
+  const std::size_t arrow = said.out.find(" -> ", at);
+  ASSERT_NE(arrow, std::string::npos);
+  const long from = std::stol(said.out.substr(at + 28)), left = std::stol(said.out.substr(arrow + 4));
+  EXPECT_LT(left, from);
+  const auto st = run_cli("stats " + tmp.file("c.ply") + " --json");
+  EXPECT_EQ(left, nlohmann::json::parse(st.out)["self_intersecting_pairs"].get<long>());
 }
 
 }  // namespace

@@ -34,7 +34,8 @@ std::vector<OptionSpec> level_specs() {
                       {"--partial", false, "accept a file cut short in its split list"},
                       {"--improve", false,
                        "shape improvement without the volume (flips within 0.25 voxel of the "
-                       "cut, tangential moves, needle collapses; docs/QUALITY.md)"},
+                       "cut, tangential moves, needle collapses; last, after any fit, pushes that "
+                       "separate intersecting triangles; docs/QUALITY.md)"},
                       {"--fit", true,
                        "least-squares vertex offsets along the normals against the volume INPUT "
                        "the hierarchy was made from (what extract writes by default; "
@@ -131,6 +132,16 @@ int cmd_level(const Argv& argv) {
     const FitStats st = fit_least_squares(cut.mesh, cut.vertex_border, *in.field, h.iso, fo);
     std::ostringstream w;
     w << ", fitted: RMS distance " << st.rms_before << " -> " << st.rms_after;
+    what += w.str();
+  }
+  if (args.has("--improve")) {
+    // Last, as extract does: the intersecting pairs a small push separates.
+    SeparateOptions so;
+    so.voxel = h.voxel;
+    so.box = h.bounds;
+    const SeparateStats st = separate_crossings(cut.mesh, cut.vertex_border, so);
+    std::ostringstream w;
+    w << ", intersecting triangle pairs " << st.intersections_before << " -> " << st.intersections_after;
     what += w.str();
   }
   write_mesh_output(cut.mesh, *out, wo);

@@ -119,8 +119,9 @@ struct ExtractReport {
   ImproveStats base_improve;        ///< shape improvement (and decimation) of M0
   ImproveStats improve;             ///< shape improvement of the output mesh
   std::optional<FitStats> fit;      ///< when the output mesh was fitted (ExtractOptions::fit)
+  std::optional<SeparateStats> separate;  ///< the last pass on an improved adaptive mesh
   /// Seconds per stage: topology_control (with max_handle or min_cavity), surfels, graph,
-  /// disk_cover, voronoi, dual, improve_base, refine, improve (read: load + the iso-value check;
+  /// disk_cover, voronoi, dual, improve_base, refine, improve, fit, separate (read: load + the iso-value check;
   /// write: filled by callers that write files).
   std::map<std::string, double> timings_s;
   /// Peak resident set size of the process (MiB) at the end of each stage, and at the end.

@@ -342,6 +342,21 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
       ctx.report("fit", 1);
       timings["fit"] = clock.lap();
     }
+    // Last, the crossings the untangling left (shallow ones) are pushed apart: no later step
+    // moves a vertex.
+    if (o.improve && ro.mode != RefineMode::uniform) {
+      ctx.report("separate", 0);
+      SeparateOptions so;
+      so.voxel = sc.grid.min_spacing();
+      so.box = in.field->domain();
+      so.faces = oblique_faces(sc.grid);
+      // An explicit bound: a push may not take a vertex farther than half of it.
+      if (o.budget == Budget::max_error && o.max_error > 0)
+        so.max_move = std::min(so.max_move, 0.5 * o.max_error / so.voxel);
+      rep.separate = separate_crossings(cut.mesh, cut.vertex_border, so, ctx);
+      ctx.report("separate", 1);
+      timings["separate"] = clock.lap();
+    }
     rep.refined = true;
     rep.refine = std::move(r.stats);
     rep.triangles = cut.mesh.num_triangles();

@@ -98,6 +98,13 @@ nlohmann::json refine_json(const ExtractReport& r) {
                                          {"intersections_before", r.fit->intersections_before},
                                          {"intersections_after", r.fit->intersections_after}}
                         : nlohmann::json{{"method", "surface"}}},
+          {"separate", r.separate ? nlohmann::json{{"intersections_before", r.separate->intersections_before},
+                                                   {"intersections_after", r.separate->intersections_after},
+                                                   {"moves", r.separate->moves},
+                                                   {"moved", r.separate->moved},
+                                                   {"undone", r.separate->undone},
+                                                   {"max_move", r.separate->max_move}}
+                                  : nlohmann::json(nullptr)},
           {"triangles", r.triangles},
           {"vertices", r.vertices},
           {"warnings", st.warnings}};
