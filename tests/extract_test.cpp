@@ -121,7 +121,7 @@ TEST(Extract, ReportsProgressInStageOrder) {
   extract("shape:genus2", o);
   const std::vector<std::string> want = {"read",       "surfels", "graph",   "disk cover",
                                          "voronoi",    "dual",    "improve M0", "refine",
-                                         "improve",    "fit"};
+                                         "improve",    "fit",     "separate"};
   EXPECT_EQ(stages, want);
 }
 

@@ -14,9 +14,10 @@
 namespace adamesh {
 
 /// Progress report: the stage's name ("read", "handles", "cavities", "surfels", "graph",
-/// "disk cover", "voronoi", "dual", "improve M0", "refine", "improve", "fit", "measure") and the
-/// fraction of it done, in [0, 1]. Called on the calling thread, never from a worker thread, with
-/// fraction 0 when a stage begins, at most every 0.1 s during the long stages, and 1 when it ends.
+/// "disk cover", "voronoi", "dual", "improve M0", "refine", "improve", "fit", "separate",
+/// "measure") and the fraction of it done, in [0, 1]. Called on the calling thread, never from a
+/// worker thread, with fraction 0 when a stage begins, at most every 0.1 s during the long
+/// stages, and 1 when it ends.
 using ProgressCallback = std::function<void(const char* stage, double fraction)>;
 
 struct ExecutionContext {

@@ -121,8 +121,8 @@ struct ExtractReport {
   std::optional<FitStats> fit;      ///< when the output mesh was fitted (ExtractOptions::fit)
   std::optional<SeparateStats> separate;  ///< the last pass on an improved adaptive mesh
   /// Seconds per stage: topology_control (with max_handle or min_cavity), surfels, graph,
-  /// disk_cover, voronoi, dual, improve_base, refine, improve, fit, separate (read: load + the iso-value check;
-  /// write: filled by callers that write files).
+  /// disk_cover, voronoi, dual, improve_base, refine, improve, fit, separate (read: load + the
+  /// iso-value check; write: filled by callers that write files).
   std::map<std::string, double> timings_s;
   /// Peak resident set size of the process (MiB) at the end of each stage, and at the end.
   std::map<std::string, double> peak_rss_after_mb;
