@@ -41,12 +41,13 @@ LEVEL_INPUTS = {"quick": ["torus@128"],
 SHAPES = ["sphere", "torus", "two_tori", "linked_tori", "genus2", "cube_minus_sphere",
           "wavy_sheet", "gyroid"]
 STAGES = ["read", "surfels", "graph", "topology_control", "disk_cover", "voronoi", "dual",
-          "improve_base", "refine", "improve", "write"]
+          "improve_base", "refine", "improve", "fit", "separate", "write"]
 # Stages that run in parallel (oneTBB) in the current sources; the thread-scaling table shows
 # what they gain. read is parallel for shape:/expr: inputs (sampling), serial for files.
 PARALLEL_STAGES = ["read (sampling of implicit inputs)", "surfels", "graph",
                    "improve_base and improve (the flip, collapse and move tests, the "
                    "intersection counts and sorts; applied in order)",
+                   "fit (the per-triangle sums; the guard's recounts)",
                    "refine (placements and error evaluation per level; the budget driver's "
                    "queue and the block matching are serial)"]
 # Issue 14: the pipeline to a 20k adaptive mesh against MC + meshopt_simplify, and the scaling
