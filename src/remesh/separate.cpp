@@ -88,7 +88,6 @@ class Separator {
     claimed_.assign(nv_, 0);
     involved_.assign(nt_, 0);
     slot_.assign(nv_, -1);
-    mark_.assign(nt_, 0);
   }
 
   SeparateStats run() {
@@ -99,8 +98,8 @@ class Separator {
       pairs_ = std::move(r.first_pairs);
     }
     st.intersections_before = pairs_.size();
-    for (int round = 0; round < o_.rounds && !pairs_.empty(); ++round)
-      if (!round_of(&Separator::plan_push, st)) break;
+    for (int r = 0; r < o_.rounds && !pairs_.empty(); ++r)
+      if (!run_round(st)) break;
     st.intersections_after = pairs_.size();
     for (std::size_t v = 0; v < nv_; ++v) {
       const double d = distance(p_[v], start_[v]);
@@ -118,7 +117,7 @@ class Separator {
   std::size_t nv_, nt_;
   std::vector<Vec3> p_, start_;
   std::vector<std::uint32_t> inc_off_, inc_;
-  std::vector<std::uint8_t> stays_, claimed_, involved_, mark_;
+  std::vector<std::uint8_t> stays_, claimed_, involved_;
   std::vector<std::int32_t> slot_;  // vertex -> its group this round (-1: not moved)
   double reach_ = 0, margin_ = 0, min_angle_ = 0;
   PairList pairs_;
@@ -203,17 +202,15 @@ class Separator {
     return true;
   }
 
-  using Planner = bool (Separator::*)(std::uint32_t, std::uint32_t);
-
   /// One round: plan every pair, count again, send back the groups that made new pairs. False
   /// when the round removed no pair (or could not count).
-  bool round_of(Planner plan, SeparateStats& st) {
+  bool run_round(SeparateStats& st) {
     ctx_.check_cancelled();
     moves_.clear();
     group_of_move_.clear();
     group_option_.clear();
     groups_ = 0;
-    for (const auto& [s, t] : pairs_) (this->*plan)(s, t);
+    for (const auto& [s, t] : pairs_) plan_push(s, t);
     for (const auto& mv : moves_) claimed_[mv.first] = 0;
     if (moves_.empty()) return false;
     std::fill(involved_.begin(), involved_.end(), 0);
