@@ -167,6 +167,10 @@ def test_stats_match_the_cli(tmp_path):
     assert py["vertices_outside_volume"] == 0  # every vertex inside the head's grid
     assert adamesh.stats(r.mesh)["vertices_outside_volume"] is None  # no field, no volume
     assert adamesh.stats(r.mesh)["triangles"] == len(r.faces)
+    # The separation of intersecting pairs ran last: its count is the mesh's.
+    sep = r.report["refine"]["separate"]
+    assert sep["intersections_after"] <= sep["intersections_before"]
+    assert sep["intersections_after"] == py["self_intersecting_pairs"]
 
 
 def test_topology_control_and_fit_match_the_cli(tmp_path):
