@@ -36,9 +36,12 @@
 #include "adamesh/error.h"
 #include "adamesh/improve.h"
 #include "adamesh/metrics.h"
+#include "remesh/geometry.h"
 
 namespace adamesh {
 namespace {
+
+using detail::smallest_angle;
 
 constexpr int kSamples = 7, kInterior = 4;
 // Barycentric weights of the sample points: four inside, then the midpoints of the sides
@@ -50,15 +53,6 @@ constexpr double kBary[kSamples][3] = {{1. / 3, 1. / 3, 1. / 3}, {2. / 3, 1. / 6
 
 Vec3 cross3(const Vec3& a, const Vec3& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-
-/// Smallest interior angle (radians) of triangle abc.
-double smallest_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
-  auto at = [](const Vec3& o, const Vec3& u, const Vec3& w) {
-    return std::atan2(norm(cross3(u - o, w - o)), dot(u - o, w - o));
-  };
-  const double x = at(a, b, c), y = at(b, c, a);
-  return std::max(0.0, std::min({x, y, std::numbers::pi - x - y}));
 }
 
 /// A move may not make a triangle of the vertex's ring sharper than this unless it was already.

@@ -24,6 +24,7 @@
 #include "adamesh/improve.h"
 #include "adamesh/metrics.h"
 #include "adamesh/volume.h"
+#include "remesh/geometry.h"
 
 #include "adamesh/context.h"
 
@@ -194,6 +195,7 @@ class Improver {
     // its face nor allowed any move, and the slivers there stayed (docs/QUALITY.md).
     if (has_box_) o_.box = widened_to_floats(o_.box);
     if (!o_.faces.empty()) set_oblique_faces();
+    bounds_ = detail::VolumeBounds(o_.box, o_.faces);
     mark_boundary_vertices();
   }
 
@@ -320,6 +322,7 @@ class Improver {
   bool oblique_ = false;  ///< o_.faces set: inside and on-face tests in the grid's index space
   std::array<Vec3, 3> face_normal_{};
   std::array<double, 3> face_tol_{};
+  detail::VolumeBounds bounds_;  ///< inside_box()
   bool small_moves_ = false;  ///< M0: every move under ¾ of the shortest incident edge
   double decimate_floor_deg_ = 0;
   std::size_t decimate_stuck_at_ = 0;
@@ -426,17 +429,7 @@ class Improver {
   }
   Vec3 grid_index(const Vec3& q) const { return o_.faces.to_index * (q - o_.faces.origin); }
 
-  bool inside_box(const Vec3& q) const {
-    if (!has_box_) return true;
-    if (oblique_) {
-      const Vec3 u = grid_index(q);
-      for (int a = 0; a < 3; ++a)
-        if (u[a] < -face_tol_[a] || u[a] > o_.faces.extent[a] + face_tol_[a]) return false;
-      return true;
-    }
-    return q.x >= o_.box.lo.x && q.y >= o_.box.lo.y && q.z >= o_.box.lo.z &&
-           q.x <= o_.box.hi.x && q.y <= o_.box.hi.y && q.z <= o_.box.hi.z;
-  }
+  bool inside_box(const Vec3& q) const { return bounds_.contains(q); }
 
   /// Distance from q to the iso-surface (Newton projection), or infinity when it does not
   /// converge to within a tenth of the deviation bound.

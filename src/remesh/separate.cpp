@@ -29,6 +29,7 @@
 #include "adamesh/error.h"
 #include "adamesh/improve.h"
 #include "adamesh/metrics.h"
+#include "remesh/geometry.h"
 
 namespace adamesh {
 
@@ -37,20 +38,13 @@ namespace {
 using Tri = std::array<std::uint32_t, 3>;
 using PairList = std::vector<std::pair<std::uint32_t, std::uint32_t>>;
 
-double smallest_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
-  auto at = [](const Vec3& p, const Vec3& q, const Vec3& r) {
-    const Vec3 u = q - p, v = r - p;
-    return std::atan2(norm(cross(u, v)), dot(u, v));
-  };
-  const double x = at(a, b, c), y = at(b, c, a);
-  return std::max(0.0, std::min({x, y, std::numbers::pi - x - y}));
-}
+using detail::smallest_angle;
 
 class Separator {
  public:
   Separator(Mesh& mesh, const std::vector<std::uint8_t>& fixed, const SeparateOptions& o,
             const ExecutionContext& ctx)
-      : mesh_(mesh), o_(o), ctx_(ctx), nv_(mesh.num_vertices()),
+      : mesh_(mesh), o_(o), bounds_(o.box, o.faces), ctx_(ctx), nv_(mesh.num_vertices()),
         nt_(mesh.num_triangles()) {
     p_.resize(nv_);
     for (std::size_t v = 0; v < nv_; ++v) p_[v] = mesh.vertex(v);
@@ -113,6 +107,7 @@ class Separator {
  private:
   Mesh& mesh_;
   SeparateOptions o_;
+  detail::VolumeBounds bounds_;
   const ExecutionContext& ctx_;
   std::size_t nv_, nt_;
   std::vector<Vec3> p_, start_;
@@ -140,21 +135,8 @@ class Separator {
     p_[v] = q;
     for (int k = 0; k < 3; ++k) mesh_.positions[3 * v + k] = static_cast<float>(q[k]);
   }
-  bool inside(const Vec3& q) const {
-    if (!o_.faces.empty()) {
-      const Vec3 u = o_.faces.to_index * (q - o_.faces.origin);
-      for (int a = 0; a < 3; ++a) {
-        const double tol = o_.faces.rounding[a] + 1e-9 * o_.faces.extent[a];
-        if (u[a] < -tol || u[a] > o_.faces.extent[a] + tol) return false;
-      }
-      return true;
-    }
-    if (!(o_.box.lo.x < o_.box.hi.x)) return true;
-    return q.x >= o_.box.lo.x && q.y >= o_.box.lo.y && q.z >= o_.box.lo.z && q.x <= o_.box.hi.x &&
-           q.y <= o_.box.hi.y && q.z <= o_.box.hi.z;
-  }
   bool may_move(std::uint32_t v, const Vec3& q) const {
-    return !stays_[v] && !claimed_[v] && inside(q) && distance(q, start_[v]) <= reach_;
+    return !stays_[v] && !claimed_[v] && bounds_.contains(q) && distance(q, start_[v]) <= reach_;
   }
   /// The triangles around v keep min(their smallest angle, the floor) and their orientation
   /// with the current positions p_ against `ref` (the positions before the move).
