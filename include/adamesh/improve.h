@@ -148,11 +148,17 @@ ImproveStats improve_base_mesh(BaseMesh& base, const ScalarField* field, double 
 /// iso-surface (the length of their Newton projections, on the derivative of the trilinear
 /// interpolant for sampled fields), which makes the error two-sided instead of one-sided.
 struct FitOptions {
-  int passes = 2;         ///< Jacobi passes
+  int passes = 4;         ///< Jacobi passes
   double damping = 0.7;   ///< fraction of each vertex's own least-squares step taken per pass
   double max_step = 1;    ///< cap on each step (world units); callers pass a fraction of a voxel
   Box box;                ///< vertices are clamped into it (empty: none)
   GridFaces faces;        ///< oblique volumes: vertices are clamped into the grid instead
+  /// Steps in every direction the samples' normals constrain (a crease: two, a corner: three)
+  /// instead of along the vertex normal only; the angle, error and intersection guards hold.
+  bool free_moves = true;
+  /// free_moves: directions whose weight (eigenvalue of Σ w² ĝĝᵀ) is under this × the largest
+  /// do not move (they are determined by noise; 1e-6 measured worse than 1e-3 on shapes).
+  double rank_ratio = 1e-3;
 };
 
 struct FitStats {

@@ -13,7 +13,15 @@
 // steer the step. Moving vertex v by t·n_v moves s by
 // w_v(s)·t·n_v and d by w_v(s)·t·(n_v·ĝ). Minimising Σ |T|/7 · d² over t_v alone:
 //   t_v = −Σ w d (n_v·ĝ) / Σ (w (n_v·ĝ))²,
-// applied to all vertices at once with damping (Jacobi), |t_v| capped. Sums per triangle are
+// applied to all vertices at once with damping (Jacobi), |t_v| capped. With free moves (the
+// default) the step is not tied to n_v: moving v by δ moves d by w_v(s)·(ĝ·δ), and
+//   δ_v = −(Σ w² ĝĝᵀ)⁺ Σ w d ĝ,
+// the pseudo-inverse keeping only the eigen-directions whose eigenvalue is at least rank_ratio ×
+// the largest (as dual contouring truncates its QEF): on a flat patch all ĝ agree and δ lies
+// along the normal; on a curved one their spread also lets the vertex slide to where its
+// triangles fit better; across a crease the normals of both sides span two directions and the
+// vertex can move onto the crease, which a step along its normal cannot reach (docs/QUALITY.md
+// "Free moves"). A direction no sample normal has a component in never moves. Sums per triangle are
 // computed in parallel and added per vertex in a fixed order: identical for any thread count.
 // The angle guard is checked on the pass's result (all moves at once), moves that break it
 // undone until none does. Moves that make triangles intersect are undone (vertices of the new
@@ -42,6 +50,7 @@ namespace adamesh {
 namespace {
 
 using detail::smallest_angle;
+using detail::symmetric_eigen;
 
 constexpr int kSamples = 7, kInterior = 4;
 // Barycentric weights of the sample points: four inside, then the midpoints of the sides
@@ -149,6 +158,9 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
   };
   // Per-triangle partial sums: [corner] numerator, denominator; plus the squared error.
   std::vector<std::array<double, 6>> part(nt);
+  // Free (3D) steps: per corner the 3×3 normal matrix Σ w² ĝĝᵀ (6 entries) and Σ w d ĝ (3).
+  const bool free3d = o.free_moves;
+  std::vector<std::array<double, 27>> part3(free3d ? nt : 0);
   std::vector<double> err2(nt), area(nt);
   std::vector<Vec3> normal(nv);
   auto rms_of_err2 = [&] {
@@ -200,6 +212,7 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
         const double a = 0.5 * norm(cross3(p[c[1]] - p[c[0]], p[c[2]] - p[c[0]]));
         area[t] = a;
         std::array<double, 6> s{};
+        std::array<double, 27> s3{};
         double e2 = 0;
         for (int j = 0; j < kSamples; ++j) {
           const auto& b = kBary[j];
@@ -221,8 +234,17 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
             s[2 * k] += a / kSamples * wg * d;
             s[2 * k + 1] += a / kSamples * wg * wg;
           }
+          if (free3d)
+            for (int k = 0; k < 3; ++k) {
+              const double w2 = a / kSamples * b[k] * b[k], wd = a / kSamples * b[k] * d;
+              double* m = &s3[9 * k];
+              m[0] += w2 * gh.x * gh.x, m[1] += w2 * gh.x * gh.y, m[2] += w2 * gh.x * gh.z;
+              m[3] += w2 * gh.y * gh.y, m[4] += w2 * gh.y * gh.z, m[5] += w2 * gh.z * gh.z;
+              m[6] += wd * gh.x, m[7] += wd * gh.y, m[8] += wd * gh.z;
+            }
         }
         part[t] = s;
+        if (free3d) part3[t] = s3;
         err2[t] = e2;
       }
     });
@@ -279,6 +301,7 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
     return sum;
   };
   std::vector<double> num(nv), den(nv), old_err;
+  std::vector<std::array<double, 9>> sum3(free3d ? nv : 0);
   std::vector<Vec3> next(nv);
   std::vector<std::uint8_t> touched(nt);
   st.rms_before = measure_and_sum(true);
@@ -291,12 +314,37 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
       const auto c = tri(t);
       for (int k = 0; k < 3; ++k) num[c[k]] += part[t][2 * k], den[c[k]] += part[t][2 * k + 1];
     }
+    if (free3d) {
+      std::fill(sum3.begin(), sum3.end(), std::array<double, 9>{});
+      for (std::size_t t = 0; t < nt; ++t) {
+        const auto c = tri(t);
+        for (int k = 0; k < 3; ++k)
+          for (int j = 0; j < 9; ++j) sum3[c[k]][j] += part3[t][9 * k + j];
+      }
+    }
     next = p;
     std::vector<std::uint32_t> moved;
     for (std::uint32_t v = 0; v < nv; ++v) {
       if (hold[v] || !(den[v] > 0)) continue;
       const double t = std::clamp(-o.damping * num[v] / den[v], -o.max_step, o.max_step);
       Vec3 q = p[v] + t * normal[v];
+      if (free3d) {
+        // Least squares over all three directions, truncated like dual contouring's QEF: only
+        // directions whose curvature is at least kRank × the largest (a flat patch constrains
+        // the normal alone, a crease two directions, a corner three).
+        const auto& m = sum3[v];
+        std::array<double, 3> w;
+        std::array<Vec3, 3> ax;
+        symmetric_eigen({m[0], m[1], m[2], m[1], m[3], m[4], m[2], m[4], m[5]}, w, ax);
+        const Vec3 r{m[6], m[7], m[8]};
+        Vec3 step{};
+        for (int i = 0; i < 3; ++i)
+          if (w[i] > 0 && w[i] >= o.rank_ratio * w[0]) step = step - (dot(ax[i], r) / w[i]) * ax[i];
+        step = o.damping * step;
+        const double len = norm(step);
+        if (len > o.max_step) step = (o.max_step / len) * step;
+        q = p[v] + step;
+      }
       if (!o.faces.empty()) {  // oblique grid: clamped in index space (when outside only)
         Vec3 u = o.faces.to_index * (q - o.faces.origin);
         bool out = false;
@@ -385,9 +433,10 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
       if (!now) break;
       st.intersections_after = now->size();
       prev = p;
-      PairList added;  // both lists are sorted
-      std::set_difference(now->begin(), now->end(), before->begin(), before->end(),
-                          std::back_inserter(added));
+      // Every pair left with a moved vertex, new or not: the pairs the mesh had are left as they
+      // were for the separation that follows (moved, it could not push 3 of gyroid@128 20k's 7
+      // apart; it separates all 7 unmoved).
+      const PairList& added = *now;
       std::size_t undone = 0;
       for (const auto& [a, b] : added)
         for (auto t : {a, b})

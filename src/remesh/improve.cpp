@@ -49,6 +49,7 @@ namespace adamesh {
 namespace {
 
 using Tri = std::array<std::uint32_t, 3>;
+using detail::symmetric_eigen;
 constexpr double kDeg = std::numbers::pi / 180;
 /// The refinement's bound on a triangle is 1.25 × its sampled error (its samples can miss the
 /// worst point); the same margin here.
@@ -130,47 +131,6 @@ double segment_distance(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3&
   return norm((p + t1 * d1) - (r + t2 * d2));
 }
 
-
-/// Eigenvectors of the symmetric 3×3 matrix a (row-major), as the columns of v, eigenvalues in
-/// w, sorted by decreasing eigenvalue; v's columns form a right-handed frame. Cyclic Jacobi
-/// sweeps (deterministic).
-void symmetric_eigen(std::array<double, 9> a, std::array<double, 3>& w, std::array<Vec3, 3>& v) {
-  std::array<double, 9> q = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  for (int sweep = 0; sweep < 32; ++sweep) {
-    const double off = a[1] * a[1] + a[2] * a[2] + a[5] * a[5];
-    if (off <= 1e-30 * (a[0] * a[0] + a[4] * a[4] + a[8] * a[8]) || off == 0) break;
-    for (int p = 0; p < 2; ++p)
-      for (int r = p + 1; r < 3; ++r) {
-        const double apr = a[3 * p + r];
-        if (apr == 0) continue;
-        const double theta = (a[3 * r + r] - a[3 * p + p]) / (2 * apr);
-        const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1));
-        const double c = 1 / std::sqrt(t * t + 1), sn = t * c;
-        for (int k = 0; k < 3; ++k) {  // a = J^T a J
-          const double akp = a[3 * k + p], akr = a[3 * k + r];
-          a[3 * k + p] = c * akp - sn * akr;
-          a[3 * k + r] = sn * akp + c * akr;
-        }
-        for (int k = 0; k < 3; ++k) {
-          const double apk = a[3 * p + k], ark = a[3 * r + k];
-          a[3 * p + k] = c * apk - sn * ark;
-          a[3 * r + k] = sn * apk + c * ark;
-        }
-        for (int k = 0; k < 3; ++k) {
-          const double qkp = q[3 * k + p], qkr = q[3 * k + r];
-          q[3 * k + p] = c * qkp - sn * qkr;
-          q[3 * k + r] = sn * qkp + c * qkr;
-        }
-      }
-  }
-  std::array<int, 3> idx = {0, 1, 2};
-  std::sort(idx.begin(), idx.end(), [&](int x, int y) { return a[4 * x] > a[4 * y] || (a[4 * x] == a[4 * y] && x < y); });
-  for (int i = 0; i < 3; ++i) {
-    w[i] = a[4 * idx[i]];
-    v[i] = Vec3{q[idx[i]], q[3 + idx[i]], q[6 + idx[i]]};
-  }
-  v[2] = cross(v[0], v[1]);
-}
 
 class Improver {
  public:
