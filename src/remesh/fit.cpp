@@ -303,63 +303,70 @@ FitStats fit_least_squares(Mesh& mesh, const std::vector<std::uint8_t>& fixed,
   std::vector<double> num(nv), den(nv), old_err;
   std::vector<std::array<double, 9>> sum3(free3d ? nv : 0);
   std::vector<Vec3> next(nv);
-  std::vector<std::uint8_t> touched(nt);
+  std::vector<std::uint8_t> touched(nt), moving(nv);
   st.rms_before = measure_and_sum(true);
   const Mat3 faces_to_world = o.faces.empty() ? Mat3{} : o.faces.to_index.inverse();
   for (int pass = 0; pass < o.passes; ++pass) {
     context.report("fit", static_cast<double>(pass) / o.passes);
-    std::fill(num.begin(), num.end(), 0.0);
-    std::fill(den.begin(), den.end(), 0.0);
-    for (std::size_t t = 0; t < nt; ++t) {
-      const auto c = tri(t);
-      for (int k = 0; k < 3; ++k) num[c[k]] += part[t][2 * k], den[c[k]] += part[t][2 * k + 1];
-    }
-    if (free3d) {
-      std::fill(sum3.begin(), sum3.end(), std::array<double, 9>{});
-      for (std::size_t t = 0; t < nt; ++t) {
-        const auto c = tri(t);
-        for (int k = 0; k < 3; ++k)
-          for (int j = 0; j < 9; ++j) sum3[c[k]][j] += part3[t][9 * k + j];
-      }
-    }
     next = p;
+    // Per vertex, in parallel: gather its triangles' sums (in ascending triangle order, the
+    // order of the incidence lists, so the sums do not depend on the thread count), then the
+    // step. `moving` marks the vertices that take one; they are listed in order afterwards.
+    tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, static_cast<std::uint32_t>(nv), 1024),
+                      [&](const auto& range) {
+      for (std::uint32_t v = range.begin(); v != range.end(); ++v) {
+        moving[v] = 0;
+        double nu = 0, de = 0;
+        std::array<double, 9> m3{};
+        for (std::uint32_t i = inc_off[v]; i < inc_off[v + 1]; ++i) {
+          const std::uint32_t t = inc[i];
+          const auto c = tri(t);
+          const int k = c[0] == v ? 0 : c[1] == v ? 1 : 2;
+          nu += part[t][2 * k], de += part[t][2 * k + 1];
+          if (free3d)
+            for (int j = 0; j < 9; ++j) m3[j] += part3[t][9 * k + j];
+        }
+        num[v] = nu, den[v] = de;
+        if (free3d) sum3[v] = m3;
+        if (hold[v] || !(den[v] > 0)) continue;
+        const double t = std::clamp(-o.damping * num[v] / den[v], -o.max_step, o.max_step);
+        Vec3 q = p[v] + t * normal[v];
+        if (free3d) {
+          // Least squares over all three directions, truncated like dual contouring's QEF: only
+          // directions whose curvature is at least kRank × the largest (a flat patch constrains
+          // the normal alone, a crease two directions, a corner three).
+          const auto& m = sum3[v];
+          std::array<double, 3> w;
+          std::array<Vec3, 3> ax;
+          symmetric_eigen({m[0], m[1], m[2], m[1], m[3], m[4], m[2], m[4], m[5]}, w, ax);
+          const Vec3 r{m[6], m[7], m[8]};
+          Vec3 step{};
+          for (int i = 0; i < 3; ++i)
+            if (w[i] > 0 && w[i] >= o.rank_ratio * w[0]) step = step - (dot(ax[i], r) / w[i]) * ax[i];
+          step = o.damping * step;
+          const double len = norm(step);
+          if (len > o.max_step) step = (o.max_step / len) * step;
+          q = p[v] + step;
+        }
+        if (!o.faces.empty()) {  // oblique grid: clamped in index space (when outside only)
+          Vec3 u = o.faces.to_index * (q - o.faces.origin);
+          bool out = false;
+          for (int k = 0; k < 3; ++k)
+            if (u[k] < 0 || u[k] > o.faces.extent[k]) {
+              u[k] = std::clamp(u[k], 0.0, o.faces.extent[k]);
+              out = true;
+            }
+          if (out) q = o.faces.origin + faces_to_world * u;
+        } else if (o.box.lo.x < o.box.hi.x) {
+          for (int k = 0; k < 3; ++k) q[k] = std::clamp(q[k], o.box.lo[k], o.box.hi[k]);
+        }
+        next[v] = q;
+        moving[v] = 1;
+      }
+    });
     std::vector<std::uint32_t> moved;
-    for (std::uint32_t v = 0; v < nv; ++v) {
-      if (hold[v] || !(den[v] > 0)) continue;
-      const double t = std::clamp(-o.damping * num[v] / den[v], -o.max_step, o.max_step);
-      Vec3 q = p[v] + t * normal[v];
-      if (free3d) {
-        // Least squares over all three directions, truncated like dual contouring's QEF: only
-        // directions whose curvature is at least kRank × the largest (a flat patch constrains
-        // the normal alone, a crease two directions, a corner three).
-        const auto& m = sum3[v];
-        std::array<double, 3> w;
-        std::array<Vec3, 3> ax;
-        symmetric_eigen({m[0], m[1], m[2], m[1], m[3], m[4], m[2], m[4], m[5]}, w, ax);
-        const Vec3 r{m[6], m[7], m[8]};
-        Vec3 step{};
-        for (int i = 0; i < 3; ++i)
-          if (w[i] > 0 && w[i] >= o.rank_ratio * w[0]) step = step - (dot(ax[i], r) / w[i]) * ax[i];
-        step = o.damping * step;
-        const double len = norm(step);
-        if (len > o.max_step) step = (o.max_step / len) * step;
-        q = p[v] + step;
-      }
-      if (!o.faces.empty()) {  // oblique grid: clamped in index space (when outside only)
-        Vec3 u = o.faces.to_index * (q - o.faces.origin);
-        bool out = false;
-        for (int k = 0; k < 3; ++k)
-          if (u[k] < 0 || u[k] > o.faces.extent[k]) {
-            u[k] = std::clamp(u[k], 0.0, o.faces.extent[k]);
-            out = true;
-          }
-        if (out) q = o.faces.origin + faces_to_world * u;
-      } else if (o.box.lo.x < o.box.hi.x) {
-        for (int k = 0; k < 3; ++k) q[k] = std::clamp(q[k], o.box.lo[k], o.box.hi[k]);
-      }
-      next[v] = q;
-      moved.push_back(v);
-    }
+    for (std::uint32_t v = 0; v < nv; ++v)
+      if (moving[v]) moved.push_back(v);
     // The guard on the pass's result (all moves at once): a moved vertex with a triangle around
     // it now sharper than min(before, 20°) goes back.
     st.guarded += guard(next, p, moved).size();
