@@ -40,8 +40,9 @@ std::vector<OptionSpec> extract_specs() {
        "(needs --format)"},
       {"--levels", true, "uniform refinement: K levels; the output is M_K"},
       {"--max-error", true,
-       "adaptive: every triangle within E of the surface, world units (default: 0.25 voxel, "
-       "at most as many triangles as marching cubes)"},
+       "adaptive: split until every triangle's estimated distance to the surface is under E, "
+       "world units; the summary gives the measured p99 and maximum and says when the p99 is "
+       "above E (default: 0.25 voxel, at most as many triangles as marching cubes)"},
       {"--triangles", true, "adaptive: the N-triangle mesh, worst triangles split first"},
       {"--hierarchy", true, "write the refinement hierarchy (.amh, see docs/HIERARCHY.md)"},
       {"--labels", true,
