@@ -317,7 +317,7 @@ ExtractResult run_pipeline(const Input& input, const ExtractOptions& o, double r
       // ¼ voxel) of where it was, as for the default. The per-triangle bound at seven points
       // (ImproveOptions::max_error) is not set: its first-order distance estimate on noisy data
       // blocked most untangling and rescue moves (MRI head at E = 1 voxel: 4,374 crossing pairs
-      // and 2.2 % of the triangles under 20° against 668 and 0.4 % without it, p99 1.95 and 1.94
+      // and 2.2 % of the triangles under 20° against 720 and 0.3 % without it, p99 1.95 and 1.98
       // against E = 4; docs/QUALITY.md "An explicit --max-error"), and the bound a user checks
       // is the measured p99, which the report gives.
       if (ro.mode == RefineMode::max_error && ro.max_triangles == 0)
