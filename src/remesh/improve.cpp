@@ -1220,39 +1220,57 @@ class Improver {
   std::size_t move_pass() {
     build_incidence();
     const std::size_t nv = p_.size();
-    std::vector<std::uint32_t> todo;
-    for (std::uint32_t v = 0; v < nv; ++v)
-      if (dirty_[v]) todo.push_back(v);
-    struct Plan {
-      Vec3 q;
-      std::uint8_t move;
-    };
-    std::vector<Plan> plan(todo.size());
-    parallel_ranges<std::size_t>(0, todo.size(), 256,
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t i = r.begin(); i != r.end(); ++i)
-                          plan[i].move = plan_move(todo[i], plan[i].q);
-                      });
-    std::vector<std::uint8_t> stale(nv, 0);  // a neighbour moved in this pass
-    std::vector<std::pair<std::uint32_t, Vec3>> wide;  // long moves and their old positions
-    std::size_t moves = 0, next = 0;
+    // In vertex order, a dirty vertex plans a move from its ring's positions, moves, and marks
+    // its ring dirty (ring vertices after it are looked at in this pass). A plan reads only the
+    // vertex's triangles, so a vertex waits only for the vertices before it that share one: in
+    // waves (each vertex one past the latest wave of its earlier neighbours; those of one wave
+    // share no triangle), each wave in parallel, the marks applied after it — the serial result
+    // for any thread count. (A parallel plan of every dirty vertex with a serial pass that made
+    // again the plans whose ring had moved re-planned more than half on one core.)
+    std::vector<std::uint32_t> wave(nv, 0);
+    std::uint32_t waves = 0;
     for (std::uint32_t v = 0; v < nv; ++v) {
-      // Only vertices whose neighbourhood changed since they were last looked at.
-      const bool planned = next < todo.size() && todo[next] == v;
-      const std::size_t i = planned ? next++ : 0;
-      if (!dirty_[v]) continue;
-      tick_.tick();
-      dirty_[v] = 0;
-      Vec3 q;
-      const bool move = planned && !stale[v] ? plan[i].move != 0 : plan_move(v, q);
-      if (!move) continue;
-      if (planned && !stale[v]) q = plan[i].q;
-      if (!small_moves_ && distance(q, p_[v]) > 0.75 * shortest_edge(v) + 1e-12)
-        wide.push_back({v, p_[v]});
-      p_[v] = q;
-      mark_ring_dirty(v);
-      for (std::uint32_t k = inc_off_[v]; k < inc_end_[v]; ++k)
-        for (auto u : t_[inc_[k]]) stale[u] = 1;
+      std::uint32_t w = 0;
+      for (std::uint32_t i = inc_off_[v]; i < inc_end_[v]; ++i)
+        for (auto u : t_[inc_[i]])
+          if (u < v) w = std::max(w, wave[u] + 1);
+      wave[v] = w;
+      waves = std::max(waves, w + 1);
+    }
+    std::vector<std::uint32_t> start(waves + 1, 0), order(nv);
+    for (std::uint32_t v = 0; v < nv; ++v) ++start[wave[v] + 1];
+    for (std::uint32_t k = 0; k < waves; ++k) start[k + 1] += start[k];
+    {
+      std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+      for (std::uint32_t v = 0; v < nv; ++v) order[fill[wave[v]]++] = v;
+    }
+    std::vector<std::uint8_t> went(nv, 0);
+    std::vector<Vec3> before(nv);
+    for (std::uint32_t k = 0; k < waves; ++k) {
+      const std::uint32_t b = start[k], e = start[k + 1];
+      std::size_t dirty = 0;
+      for (std::uint32_t i = b; i < e; ++i) dirty += dirty_[order[i]];
+      if (dirty == 0) continue;
+      parallel_ranges<std::uint32_t>(b, e, 64, [&](const tbb::blocked_range<std::uint32_t>& r) {
+        for (std::uint32_t i = r.begin(); i != r.end(); ++i) {
+          const std::uint32_t v = order[i];
+          if (!dirty_[v]) continue;
+          dirty_[v] = 0;
+          Vec3 q;
+          if (!plan_move(v, q)) continue;
+          before[v] = p_[v];
+          went[v] = !small_moves_ && distance(q, p_[v]) > 0.75 * shortest_edge(v) + 1e-12 ? 2 : 1;
+          p_[v] = q;
+        }
+      });
+      for (std::uint32_t i = b; i < e; ++i)
+        if (went[order[i]]) mark_ring_dirty(order[i]);
+    }
+    std::vector<std::pair<std::uint32_t, Vec3>> wide;  // long moves and their old positions
+    std::size_t moves = 0;
+    for (std::uint32_t v = 0; v < nv; ++v) {
+      if (!went[v]) continue;
+      if (went[v] == 2) wide.push_back({v, before[v]});
       ++moves;
     }
     return moves - undo_crossing_moves(wide);
