@@ -35,6 +35,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <numeric>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -1012,22 +1013,31 @@ class Improver {
     existing.reserve(sides.size() / 2 + 1);
     for (const Side& sd : sides)
       if (existing.empty() || existing.back() != sd.key) existing.push_back(sd.key);
-    struct Edge {
-      std::uint32_t t1, t2;
-      std::uint8_t k1, k2;
-    };
-    std::vector<Edge> edges;
+    std::vector<FlipEdge> edges;
     edges.reserve(3 * t_.size() / 2);
     for_each_interior_edge(sides, [&](std::uint32_t t1, std::uint8_t k1, std::uint32_t t2, std::uint8_t k2) {
       edges.push_back({t1, t2, k1, k2});
     });
+    return flip_edges(edges, existing, 512);
+  }
+
+  /// An interior edge: side k1 of triangle t1 and side k2 of t2 (t1 the lower index).
+  struct FlipEdge {
+    std::uint32_t t1, t2;
+    std::uint8_t k1, k2;
+  };
+
+  /// The flips of `edges` (in edge-key order) that pass flip_ok — tested in parallel on the
+  /// starting mesh, `existing` the sorted keys of the edges a flip could duplicate — applied in
+  /// order; an edge whose triangles an earlier flip touched, or whose new edge an earlier flip
+  /// made, stays.
+  std::size_t flip_edges(const std::vector<FlipEdge>& edges, const std::vector<std::uint64_t>& existing,
+                         std::size_t grain) {
     std::vector<std::uint8_t> ok(edges.size(), 0);
-    parallel_ranges<std::size_t>(0, edges.size(), 512,
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t i = r.begin(); i != r.end(); ++i)
-                          ok[i] = flip_ok(edges[i].t1, edges[i].k1, edges[i].t2, edges[i].k2,
-                                          existing);
-                      });
+    parallel_ranges<std::size_t>(0, edges.size(), grain, [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i)
+        ok[i] = flip_ok(edges[i].t1, edges[i].k1, edges[i].t2, edges[i].k2, existing);
+    });
     std::unordered_set<std::uint64_t> added;
     std::vector<std::uint8_t> touched(t_.size(), 0);
     std::size_t flips = 0;
@@ -1060,12 +1070,7 @@ class Improver {
       for (std::size_t t = r.begin(); t != r.end(); ++t)
         bad[t] = tri_alive_[t] && tri_min_angle(t_[t]) < floor;
     });
-    struct Edge {
-      std::uint64_t key;
-      std::uint32_t t1, t2;
-      std::uint8_t k1, k2;
-    };
-    std::vector<Edge> edges;
+    std::vector<std::pair<std::uint64_t, FlipEdge>> keyed;
     for (std::uint32_t t = 0; t < t_.size(); ++t) {
       if (!bad[t]) continue;
       for (std::uint8_t k = 0; k < 3; ++k) {
@@ -1085,47 +1090,23 @@ class Improver {
           }
         }
         if (sides != 2 || u == UINT32_MAX || t_[u][ku] != b) continue;
-        if (t < u) edges.push_back({edge_key(a, b), t, u, k, ku});
-        else edges.push_back({edge_key(a, b), u, t, ku, k});
+        keyed.push_back({edge_key(a, b), t < u ? FlipEdge{t, u, k, ku} : FlipEdge{u, t, ku, k}});
       }
     }
-    std::sort(edges.begin(), edges.end(), [](const Edge& x, const Edge& y) { return x.key < y.key; });
-    edges.erase(std::unique(edges.begin(), edges.end(), [](const Edge& x, const Edge& y) { return x.key == y.key; }),
-                edges.end());
+    std::sort(keyed.begin(), keyed.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    std::vector<FlipEdge> edges;
+    for (std::size_t i = 0; i < keyed.size(); ++i)
+      if (i == 0 || keyed[i].first != keyed[i - 1].first) edges.push_back(keyed[i].second);
     // The edges a flip could duplicate: those at the apexes.
     std::vector<std::uint64_t> existing;
-    for (const Edge& e : edges)
+    for (const FlipEdge& e : edges)
       for (const std::uint32_t x : {t_[e.t1][(e.k1 + 2) % 3], t_[e.t2][(e.k2 + 2) % 3]})
         for (std::uint32_t i = inc_off_[x]; i < inc_end_[x]; ++i)
           for (auto w : t_[inc_[i]])
             if (w != x) existing.push_back(edge_key(x, w));
     std::sort(existing.begin(), existing.end());
     existing.erase(std::unique(existing.begin(), existing.end()), existing.end());
-    std::vector<std::uint8_t> ok(edges.size(), 0);
-    parallel_ranges<std::size_t>(0, edges.size(), 64, [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t i = r.begin(); i != r.end(); ++i)
-        ok[i] = flip_ok(edges[i].t1, edges[i].k1, edges[i].t2, edges[i].k2, existing);
-    });
-    std::unordered_set<std::uint64_t> added;
-    std::vector<std::uint8_t> touched(t_.size(), 0);
-    std::size_t flips = 0;
-    for (std::size_t i = 0; i < edges.size(); ++i) {
-      if (!ok[i]) continue;
-      const auto& e = edges[i];
-      const std::uint32_t t1 = e.t1, t2 = e.t2, k1 = e.k1, k2 = e.k2;
-      if (touched[t1] || touched[t2]) continue;
-      const std::uint32_t a = t_[t1][k1], b = t_[t1][(k1 + 1) % 3], x = t_[t1][(k1 + 2) % 3];
-      const std::uint32_t y = t_[t2][(k2 + 2) % 3];
-      const std::uint64_t kxy = edge_key(x, y);
-      if (added.count(kxy)) continue;
-      dirty_[a] = dirty_[b] = dirty_[x] = dirty_[y] = 1;
-      t_[t1] = {a, y, x};
-      t_[t2] = {b, x, y};
-      touched[t1] = touched[t2] = 1;
-      added.insert(kxy);
-      ++flips;
-    }
-    return flips;
+    return flip_edges(edges, existing, 64);
   }
 
   bool flip_within_deviation(const Vec3& pa, const Vec3& pb, const Vec3& px, const Vec3& py) const {
@@ -1217,6 +1198,31 @@ class Improver {
   /// next). The plans of the vertices dirty at the start are made in parallel on the starting
   /// mesh; a vertex whose ring an earlier move of this pass changed is planned again, in order,
   /// so the pass moves exactly what the serial pass would, for any thread count (issue 14).
+  /// Vertices `members` (ascending) in waves for a pass that visits them in vertex order and
+  /// whose step at a vertex reads and writes only its triangles: each member one past the latest
+  /// wave of the earlier members sharing a triangle with it, so members of one wave share none
+  /// and the waves in turn, each in parallel, give the serial order's result. Wave k is
+  /// order[start[k] .. start[k + 1]), ascending. Needs the incidence lists current.
+  void waves_of(const std::vector<std::uint32_t>& members, std::vector<std::uint32_t>& order,
+                std::vector<std::uint32_t>& start) const {
+    std::vector<std::uint32_t> wave(p_.size(), 0);  // 1 + wave of a member, 0 otherwise
+    std::uint32_t waves = 0;
+    for (const std::uint32_t v : members) {
+      std::uint32_t w = 0;
+      for (std::uint32_t i = inc_off_[v]; i < inc_end_[v]; ++i)
+        for (auto u : t_[inc_[i]])
+          if (u < v) w = std::max(w, wave[u]);
+      wave[v] = w + 1;
+      waves = std::max(waves, w + 1);
+    }
+    start.assign(waves + 1, 0);
+    for (const std::uint32_t v : members) ++start[wave[v]];
+    for (std::uint32_t k = 0; k < waves; ++k) start[k + 1] += start[k];
+    order.resize(members.size());
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (const std::uint32_t v : members) order[fill[wave[v] - 1]++] = v;
+  }
+
   std::size_t move_pass() {
     build_incidence();
     const std::size_t nv = p_.size();
@@ -1227,26 +1233,12 @@ class Improver {
     // share no triangle), each wave in parallel, the marks applied after it — the serial result
     // for any thread count. (A parallel plan of every dirty vertex with a serial pass that made
     // again the plans whose ring had moved re-planned more than half on one core.)
-    std::vector<std::uint32_t> wave(nv, 0);
-    std::uint32_t waves = 0;
-    for (std::uint32_t v = 0; v < nv; ++v) {
-      std::uint32_t w = 0;
-      for (std::uint32_t i = inc_off_[v]; i < inc_end_[v]; ++i)
-        for (auto u : t_[inc_[i]])
-          if (u < v) w = std::max(w, wave[u] + 1);
-      wave[v] = w;
-      waves = std::max(waves, w + 1);
-    }
-    std::vector<std::uint32_t> start(waves + 1, 0), order(nv);
-    for (std::uint32_t v = 0; v < nv; ++v) ++start[wave[v] + 1];
-    for (std::uint32_t k = 0; k < waves; ++k) start[k + 1] += start[k];
-    {
-      std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-      for (std::uint32_t v = 0; v < nv; ++v) order[fill[wave[v]]++] = v;
-    }
+    std::vector<std::uint32_t> all(nv), order, start;
+    std::iota(all.begin(), all.end(), 0u);
+    waves_of(all, order, start);
     std::vector<std::uint8_t> went(nv, 0);
     std::vector<Vec3> before(nv);
-    for (std::uint32_t k = 0; k < waves; ++k) {
+    for (std::size_t k = 0; k + 1 < start.size(); ++k) {
       const std::uint32_t b = start[k], e = start[k + 1];
       std::size_t dirty = 0;
       for (std::uint32_t i = b; i < e; ++i) dirty += dirty_[order[i]];
@@ -2020,41 +2012,26 @@ class Improver {
         for (std::size_t t = 0; t < t_.size(); ++t)
           if (below[t])
             for (auto v : t_[t]) sel[v] = 1;
-        // In waves: a vertex's search reads only its triangles, so it waits for the candidates
-        // before it (in vertex order) that share one of them, and the candidates of one wave share
-        // none — each wave runs in parallel, and the result is the serial one (vertex order) for
-        // any thread count.
-        std::vector<std::uint32_t> cand;
+        // A vertex's search reads only its triangles: in waves (waves_of), the serial result
+        // (vertex order) for any thread count.
+        std::vector<std::uint32_t> cand, order, start;
         for (std::uint32_t v = 0; v < p_.size(); ++v)
           if (sel[v]) cand.push_back(v);
-        std::vector<std::uint32_t> wave(p_.size(), 0);  // 1 + wave of a candidate, 0 otherwise
-        std::uint32_t waves = 0;
-        for (const std::uint32_t v : cand) {
-          std::uint32_t w = 0;
-          for (std::uint32_t j = inc_off_[v]; j < inc_end_[v]; ++j)
-            for (auto u : t_[inc_[j]])
-              if (u < v) w = std::max(w, wave[u]);
-          wave[v] = w + 1;
-          waves = std::max(waves, w + 1);
-        }
-        std::vector<std::vector<std::uint32_t>> by_wave(waves);
-        for (std::size_t i = 0; i < cand.size(); ++i) by_wave[wave[cand[i]] - 1].push_back(static_cast<std::uint32_t>(i));
-        std::vector<Vec3> before(cand.size());
-        std::vector<std::uint8_t> went(cand.size(), 0);
-        for (const auto& members : by_wave) {
-          parallel_ranges<std::size_t>(0, members.size(), 8, [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t k = r.begin(); k != r.end(); ++k) {
-              const std::uint32_t i = members[k], v = cand[i];
-              before[i] = p_[v];
-              went[i] = rescue_vertex(v, reach[v], widen);
+        waves_of(cand, order, start);
+        std::vector<Vec3> before(p_.size());
+        std::vector<std::uint8_t> went(p_.size(), 0);
+        for (std::size_t k = 0; k + 1 < start.size(); ++k)
+          parallel_ranges<std::uint32_t>(start[k], start[k + 1], 8, [&](const tbb::blocked_range<std::uint32_t>& r) {
+            for (std::uint32_t i = r.begin(); i != r.end(); ++i) {
+              const std::uint32_t v = order[i];
+              before[v] = p_[v];
+              went[v] = rescue_vertex(v, reach[v], widen);
             }
           });
-        }
         std::size_t n = 0;
-        for (std::size_t i = 0; i < cand.size(); ++i) {
-          if (!went[i]) continue;
-          const std::uint32_t v = cand[i];
-          if (!in_from[v]) from.push_back({v, before[i]});
+        for (const std::uint32_t v : cand) {
+          if (!went[v]) continue;
+          if (!in_from[v]) from.push_back({v, before[v]});
           in_from[v] = 1;
           ++n;
         }
